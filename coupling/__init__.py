@@ -1,0 +1,1 @@
+"""Coupling between the SPH side (sensor particles) and substrate backends (FEM, TL-SPH)."""
