@@ -12,7 +12,7 @@ Operators (equation numbers of Park (2019) in brackets, sources in the docstring
 * :func:`renormalised_gradient`  B_i sum_j V_j (f_j - f_i) gW (exact for linear f)        [2.5]
 * :func:`divergence`             sum_j V_j (u_j - u_i) . gW, optionally renormalised      [2.7-2.8]
 * :func:`laplacian_weights_brookshaw`  Brookshaw (1985) / Cleary & Monaghan (1999)        [2.10]
-* :func:`laplacian_weights_corrected`  Fatehi & Manzari (2011), exact for quadratic f     [2.11-2.13]
+* :func:`laplacian_weights_corrected`  Fatehi & Manzari (2011), exact for quadratics [2.11-2.13]
 
 Both Laplacians are linear in f with a compact stencil, so they are stored as one weight per
 neighbour pair, ``lap f_i = sum_j w_ij (f_j - f_i)`` (:func:`apply_pair_weights`).  The same
@@ -376,7 +376,9 @@ def _laplacian_weights_corrected(x, vol, offsets, indices, R, sigma, kind, perio
     return w, ok
 
 
-def laplacian_weights_corrected(x, vol, offsets, indices, R, sigma, kind, period, cond_max=COND_MAX):
+def laplacian_weights_corrected(
+    x, vol, offsets, indices, R, sigma, kind, period, cond_max=COND_MAX
+):
     """Pair weights of the Fatehi & Manzari (2011) second-order consistent Laplacian.
 
     With r = x_j - x_i, e = r/|r| and the renormalised gradient g_i (eq. 2.5),

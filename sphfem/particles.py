@@ -89,7 +89,8 @@ class ParticleSet:
         ps.fields["rho"] = np.array(rho_a, dtype=np.float64)
         ps.fields["vol"] = np.array(vol_a, dtype=np.float64)
         ps.fields["m"] = np.array(m_a, dtype=np.float64)
-        ps.fields["kind"] = np.array(np.broadcast_to(FLUID if kind is None else kind, (n,)), np.int8)
+        kind = FLUID if kind is None else kind
+        ps.fields["kind"] = np.array(np.broadcast_to(kind, (n,)), np.int8)
         ps.fields["material"] = np.array(
             np.broadcast_to(0 if material is None else material, (n,)), np.int32
         )
@@ -125,7 +126,8 @@ class ParticleSet:
 
     def select(self, mask: np.ndarray) -> ParticleSet:
         """A new set holding copies of the particles where ``mask`` is true."""
-        return ParticleSet(self.dim, {k: np.ascontiguousarray(a[mask]) for k, a in self.fields.items()})
+        fields = {k: np.ascontiguousarray(a[mask]) for k, a in self.fields.items()}
+        return ParticleSet(self.dim, fields)
 
     def append(self, other: ParticleSet) -> None:
         """Concatenate ``other`` (same dim); fields missing on one side are zero-filled."""

@@ -1,0 +1,131 @@
+"""Command line: ``sphfem run | validate | bench``.
+
+Exit codes: 0 success, 1 a validation case failed its criteria or a run stopped on a
+stability guard, 2 usage errors (bad arguments, malformed scene, existing output folder).
+User errors are printed as one line on stderr, never as a traceback.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import sys
+
+EXIT_OK, EXIT_FAIL, EXIT_USAGE = 0, 1, 2
+
+
+class UsageError(Exception):
+    """A mistake of the user's (arguments, scene, output folder): one line, exit code 2."""
+
+
+def _parser() -> argparse.ArgumentParser:
+    p = argparse.ArgumentParser(
+        prog="sphfem",
+        description="Coupled SPH-FEM multiphysics: droplet deposition, heat and substrate stress.",
+    )
+    p.add_argument("-v", "--verbose", action="store_true", help="log debug messages")
+    sub = p.add_subparsers(dest="command", metavar="COMMAND")
+
+    r = sub.add_parser("run", help="run a scene file", description="Run a TOML scene.")
+    r.add_argument("scene", help="scene file (.toml), see docs/scenes.md")
+    r.add_argument("--out", required=True, help="output folder (summary.json, VTU/PVD series)")
+    r.add_argument("--overwrite", action="store_true", help="replace an existing output folder")
+    r.add_argument("--resume", action="store_true",
+                   help="continue from the last checkpoint in the output folder")
+    r.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+
+    v = sub.add_parser("validate", help="run a named validation case",
+                       description="Run a validation case at several resolutions and variants.")
+    v.add_argument("case", nargs="?", help="case name (see --list)")
+    v.add_argument("--list", action="store_true", help="list the available cases")
+    v.add_argument("--quick", action="store_true", help="fewer / coarser resolutions")
+    v.add_argument("--json", metavar="FILE", help="write the results as JSON")
+    v.add_argument("--plot", metavar="FILE", help="write an error-versus-wall-time PNG")
+
+    b = sub.add_parser("bench", help="throughput benchmarks",
+                       description="Neighbour search and summation-density throughput.")
+    b.add_argument("name", help="benchmark name: neighbors | density")
+    b.add_argument("--json", metavar="FILE", help="write the figures as JSON")
+    b.add_argument("--quick", action="store_true", help="small sizes (for smoke tests)")
+    return p
+
+
+def _cmd_validate(args) -> int:
+    from sphfem.validation import format_table, load_cases, work_precision_plot, write_json
+
+    cases = load_cases()
+    if args.list:
+        for name, fn in sorted(cases.items()):
+            doc = (fn.__doc__ or "").strip().splitlines()
+            print(f"{name:<20} {doc[0] if doc else ''}")
+        return EXIT_OK
+    if not args.case:
+        raise UsageError("validate: give a case name or --list")
+    if args.case not in cases:
+        raise UsageError(f"validate: unknown case {args.case!r}; known: {', '.join(sorted(cases))}")
+    result = cases[args.case](args.quick)
+    print(format_table(result))
+    if args.json:
+        write_json(result, args.json)
+    if args.plot:
+        work_precision_plot(result, args.plot)
+    return EXIT_OK if result.passed else EXIT_FAIL
+
+
+def _cmd_bench(args) -> int:
+    from sphfem.bench import BENCHMARKS, run_bench
+    from sphfem.output import write_json
+
+    if args.name not in BENCHMARKS:
+        raise UsageError(f"bench: unknown benchmark {args.name!r}; known: {', '.join(BENCHMARKS)}")
+    res = run_bench(args.name, quick=args.quick)
+    if args.json:
+        write_json(args.json, res)
+    return EXIT_OK
+
+
+def _cmd_run(args) -> int:
+    from sphfem.output import OutputExistsError, prepare_output_dir
+    from sphfem.scene import SceneError, load_scene
+    from sphfem.simulation import Simulation, SimulationStopped
+
+    try:
+        scene = load_scene(args.scene)
+    except SceneError as e:
+        raise UsageError(str(e)) from None
+    try:
+        out = prepare_output_dir(args.out, overwrite=args.overwrite, resume=args.resume)
+    except OutputExistsError as e:
+        raise UsageError(str(e)) from None
+    sim = Simulation(scene, source=args.scene)
+    try:
+        summary = sim.run(out, progress=not args.no_progress, resume=args.resume)
+    except SimulationStopped as e:
+        print(f"sphfem: run stopped: {e}", file=sys.stderr)
+        return EXIT_FAIL
+    print(json.dumps({k: summary[k] for k in ("steps", "t", "wall_s") if k in summary}))
+    return EXIT_OK
+
+
+def main(argv=None) -> int:
+    parser = _parser()
+    try:
+        args = parser.parse_args(argv)
+    except SystemExit as e:  # argparse already printed its one-line usage error
+        return EXIT_USAGE if e.code else EXIT_OK
+    logging.basicConfig(level=logging.DEBUG if args.verbose else logging.WARNING,
+                        format="%(levelname)s %(name)s: %(message)s")
+    if args.command is None:
+        parser.print_help()
+        return EXIT_USAGE
+    handler = {"run": _cmd_run, "validate": _cmd_validate, "bench": _cmd_bench}[args.command]
+    try:
+        return handler(args)
+    except UsageError as e:
+        print(f"sphfem: error: {e}", file=sys.stderr)
+        return EXIT_USAGE
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,132 @@
+"""Result files: atomic writes, output-folder guard, VTU/PVD particle series, summary.json.
+
+Every file is first written to a temporary name in the same folder and then renamed, so a
+killed run never leaves a half-written file behind.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import shutil
+import tempfile
+from pathlib import Path
+
+import numpy as np
+
+
+class OutputExistsError(Exception):
+    """The output folder exists and ``--overwrite`` was not given."""
+
+
+def atomic_write_bytes(path, data: bytes) -> None:
+    """Write ``data`` to ``path`` via a temporary file and an atomic rename."""
+    path = Path(path)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
+    try:
+        with os.fdopen(fd, "wb") as fh:
+            fh.write(data)
+        os.replace(tmp, path)
+    except BaseException:
+        if os.path.exists(tmp):
+            os.unlink(tmp)
+        raise
+
+
+def atomic_write_text(path, text: str) -> None:
+    """Text variant of :func:`atomic_write_bytes` (UTF-8)."""
+    atomic_write_bytes(path, text.encode("utf-8"))
+
+
+def write_json(path, obj) -> None:
+    """Atomically write ``obj`` as indented JSON (numpy scalars/arrays converted)."""
+    atomic_write_text(path, json.dumps(_plain(obj), indent=2, allow_nan=False))
+
+
+def _plain(o):
+    """Convert numpy types, tuples and non-finite floats into JSON-safe values."""
+    if isinstance(o, dict):
+        return {str(k): _plain(v) for k, v in o.items()}
+    if isinstance(o, (list, tuple)):
+        return [_plain(v) for v in o]
+    if isinstance(o, np.ndarray):
+        return _plain(o.tolist())
+    if isinstance(o, np.generic):
+        return _plain(o.item())
+    if isinstance(o, float) and not np.isfinite(o):
+        return None
+    if isinstance(o, Path):
+        return str(o)
+    return o
+
+
+def prepare_output_dir(path, overwrite: bool = False, resume: bool = False) -> Path:
+    """Create the output folder; refuse an existing non-empty one unless told otherwise.
+
+    ``overwrite`` deletes the old contents; ``resume`` keeps them (for a checkpoint restart).
+    """
+    path = Path(path)
+    if path.exists() and not path.is_dir():
+        raise OutputExistsError(f"{path}: exists and is not a folder")
+    if path.exists() and any(path.iterdir()):
+        if resume:
+            return path
+        if not overwrite:
+            raise OutputExistsError(
+                f"{path}: output folder exists and is not empty; pass --overwrite to replace it"
+            )
+        shutil.rmtree(path)
+    path.mkdir(parents=True, exist_ok=True)
+    return path
+
+
+class ParticleSeries:
+    """A VTU file per output time plus a ParaView ``.pvd`` collection (written through meshio).
+
+    Particles are written as VTK vertex cells with their fields as point data.
+    """
+
+    def __init__(self, folder, name: str = "particles"):
+        self.folder = Path(folder)
+        self.name = name
+        self.entries: list[tuple[float, str]] = []
+
+    def write(self, t: float, particles, fields=None) -> Path:
+        import meshio
+
+        x = particles.x
+        n, dim = x.shape
+        pts = np.zeros((n, 3))
+        pts[:, :dim] = x
+        data = {}
+        for k in fields or particles.fields:
+            if k == "x" or k not in particles.fields:
+                continue
+            a = particles.fields[k]
+            if a.ndim == 2 and a.shape[1] == dim and dim < 3:
+                b = np.zeros((n, 3), dtype=np.float64)
+                b[:, :dim] = a
+                a = b
+            elif a.ndim == 3:
+                a = a.reshape(n, -1)
+            data[k] = a.astype(np.float64) if a.dtype.kind in "biu" else a
+        mesh = meshio.Mesh(pts, [("vertex", np.arange(n).reshape(-1, 1))], point_data=data)
+        fname = f"{self.name}_{len(self.entries):05d}.vtu"
+        tmp = self.folder / f".{fname}.tmp.vtu"
+        meshio.write(tmp, mesh, file_format="vtu")
+        os.replace(tmp, self.folder / fname)
+        self.entries.append((float(t), fname))
+        self._write_pvd()
+        return self.folder / fname
+
+    def _write_pvd(self) -> None:
+        rows = "\n".join(
+            f'    <DataSet timestep="{t:.9g}" group="" part="0" file="{f}"/>'
+            for t, f in self.entries
+        )
+        text = (
+            '<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n'
+            f"  <Collection>\n{rows}\n  </Collection>\n</VTKFile>\n"
+        )
+        atomic_write_text(self.folder / f"{self.name}.pvd", text)
