@@ -1,0 +1,236 @@
+"""The time-stepping driver: builds what a scene names and runs it to the end time.
+
+One step: (re)build the neighbour list if a module moves particles, ask every module for its
+stable-time-step limits, take the smallest (and the scene's fixed ``time.dt`` if smaller),
+step every module in scene order, check the state for NaN/Inf, write outputs when due.
+A run records wall seconds per module and for the neighbour search, dt statistics with the
+controlling limit, and each module's diagnostics in ``summary.json``.
+"""
+
+from __future__ import annotations
+
+import logging
+import platform
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+
+from sphfem import __version__, kernels
+from sphfem.neighbors import build_neighbor_list, cell_sort_permutation
+from sphfem.output import ParticleSeries, atomic_write_bytes, write_json
+from sphfem.physics import build_modules
+
+logger = logging.getLogger(__name__)
+
+CHECKPOINT = "checkpoint.npz"
+
+
+class SimulationStopped(Exception):
+    """A stability guard stopped the run (the last state was written before raising)."""
+
+
+class Simulation:
+    """A scene's particles, kernel, neighbour list and physics modules.
+
+    Attributes used by modules: ``particles`` (:class:`~sphfem.particles.ParticleSet`),
+    ``nbrs`` (:class:`~sphfem.neighbors.NeighborList`), ``R`` (support radius), ``sigma``,
+    ``kind`` (kernel code), ``period`` (periodic lengths, 0 = open), ``lo``/``hi`` (domain),
+    ``t``, ``step_count``, ``scene``.
+    """
+
+    def __init__(self, scene, source: str | None = None, particles=None):
+        from sphfem.geometry import build_particles
+
+        self.scene = scene
+        self.source = source
+        self.dim = scene.dim
+        self.R = scene.sph.support_factor * scene.sph.dx
+        self.kind = kernels.kernel_code(scene.sph.kernel)
+        self.sigma = kernels.kernel_sigma(self.kind, self.dim, self.R)
+        self.lo = np.asarray(scene.domain.lo, dtype=np.float64)
+        self.hi = np.asarray(scene.domain.hi, dtype=np.float64)
+        self.period = np.where(scene.domain.periodic, self.hi - self.lo, 0.0)
+        self.particles = particles if particles is not None else build_particles(scene)
+        self.modules = build_modules(scene)
+        for mod in self.modules:
+            for name, (dtype, ncomp) in mod.fields().items():
+                self.particles.add_field(name, ncomp, dtype)
+        self.t = 0.0
+        self.step_count = 0
+        self.nbrs = None
+        self.wall = {"neighbors": 0.0, **{m.name: 0.0 for m in self.modules}}
+        self._sort_by_cell()
+        self.update_neighbors()
+        for mod in self.modules:
+            mod.init(self)
+        logger.info("scene %s: %d particles, dim %d, kernel %s, R = %g m, modules %s",
+                    getattr(scene, "name", "?"), self.particles.n, self.dim, scene.sph.kernel,
+                    self.R, [m.name for m in self.modules])
+
+    # -- neighbours -----------------------------------------------------------------------
+    def _sort_by_cell(self) -> None:
+        perm = cell_sort_permutation(self.particles.x, self.R, self.lo, self.hi)
+        self.particles.reorder(perm)
+
+    def update_neighbors(self) -> None:
+        t0 = time.perf_counter()
+        self.nbrs = build_neighbor_list(self.particles.x, self.R, self.lo, self.hi, self.period)
+        self.wall["neighbors"] += time.perf_counter() - t0
+
+    @property
+    def kernel_args(self) -> tuple:
+        """(x, vol, offsets, indices, R, sigma, kind, period): the operators' common tail."""
+        p, nl = self.particles, self.nbrs
+        return (p.x, p.vol, nl.offsets, nl.indices, self.R, self.sigma, self.kind, self.period)
+
+    # -- time stepping --------------------------------------------------------------------
+    def stable_dt(self) -> tuple[float, str]:
+        """Smallest time-step limit over all modules and the scene's fixed dt, with its name."""
+        limits = {}
+        for mod in self.modules:
+            for k, v in mod.dt_limits(self).items():
+                limits[f"{mod.name}.{k}"] = v
+        fixed = self.scene.time.dt
+        if fixed is not None:
+            limits["time.dt"] = fixed
+        if not limits:
+            raise SimulationStopped("no module limits the time step and [time] dt is not set")
+        name = min(limits, key=limits.get)
+        return limits[name], name
+
+    def step(self, dt: float) -> None:
+        if any(m.moves_particles for m in self.modules) and self.step_count > 0:
+            self.update_neighbors()
+        for mod in self.modules:
+            t0 = time.perf_counter()
+            mod.step(self, dt)
+            self.wall[mod.name] += time.perf_counter() - t0
+        self.t += dt
+        self.step_count += 1
+
+    def check_state(self) -> None:
+        """Stop with a clear message if any float field holds NaN or Inf."""
+        bad = self.particles.check_finite()
+        if bad:
+            counts = {
+                k: int((~np.isfinite(self.particles.fields[k])).reshape(self.particles.n, -1)
+                       .any(axis=1).sum())
+                for k in bad
+            }
+            raise SimulationStopped(
+                f"step {self.step_count}, t = {self.t:.6g} s: non-finite values in "
+                + ", ".join(f"{k} ({c} particles)" for k, c in counts.items())
+                + "; likely cause: time step above the stable limit or an unresolved "
+                "stiff material (try a smaller [time] cfl or the implicit option)"
+            )
+
+    def run(self, out, progress: bool = True, resume: bool = False) -> dict:
+        """Run to ``scene.time.t_end``; write outputs into folder ``out``; return the summary."""
+        from tqdm import tqdm
+
+        out = Path(out)
+        t_end = self.scene.time.t_end
+        max_steps = self.scene.time.max_steps
+        every = self.scene.output.every
+        series = ParticleSeries(out)
+        fields = self.scene.output.fields or None
+        if resume and (out / CHECKPOINT).exists():
+            self.load_checkpoint(out / CHECKPOINT)
+            series.entries = self._series_entries
+        else:
+            series.write(self.t, self.particles, fields)
+        next_out = self.t + every if every else np.inf
+        dts, limiter_counts = [], {}
+        status, message = "completed", ""
+        wall0 = time.perf_counter()
+        bar = tqdm(total=t_end, unit="s", disable=not progress or None, leave=False,
+                   bar_format="{l_bar}{bar}| {n:.3g}/{total:.3g} s [{elapsed}<{remaining}]")
+        bar.update(self.t)
+        try:
+            while self.t < t_end * (1 - 1e-12):
+                if max_steps is not None and self.step_count >= max_steps:
+                    status = "max_steps"
+                    break
+                dt, limiter = self.stable_dt()
+                dt = min(dt, t_end - self.t)
+                if every:
+                    dt = min(dt, max(next_out - self.t, 1e-300))
+                self.step(dt)
+                self.check_state()
+                dts.append(dt)
+                limiter_counts[limiter] = limiter_counts.get(limiter, 0) + 1
+                bar.update(dt)
+                if self.t >= next_out * (1 - 1e-12):
+                    series.write(self.t, self.particles, fields)
+                    self.save_checkpoint(out / CHECKPOINT, series)
+                    next_out += every
+        except SimulationStopped as e:
+            status, message = "stopped", str(e)
+        finally:
+            bar.close()
+        wall = time.perf_counter() - wall0
+        if not series.entries or series.entries[-1][0] != self.t:
+            series.write(self.t, self.particles, fields)
+        summary = self.summary(status, message, wall, dts, limiter_counts)
+        write_json(out / "summary.json", summary)
+        if status == "stopped":
+            raise SimulationStopped(message)
+        return summary
+
+    # -- records --------------------------------------------------------------------------
+    def summary(self, status, message, wall, dts, limiter_counts) -> dict:
+        import numba
+
+        n = self.particles.n
+        dts = np.asarray(dts) if dts else np.zeros(1)
+        kinds = np.bincount(self.particles.kind.astype(np.int64), minlength=4)
+        return {
+            "status": status,
+            "message": message,
+            "scene_file": self.source,
+            "scene": self.scene.to_dict(),
+            "versions": {
+                "sphfem": __version__, "python": sys.version.split()[0],
+                "numpy": np.__version__, "numba": numba.__version__,
+                "platform": platform.platform(),
+            },
+            "threads": numba.get_num_threads(),
+            "particles": {"total": n, "fluid": int(kinds[0]), "wall": int(kinds[1]),
+                          "solid": int(kinds[2]), "ghost": int(kinds[3])},
+            "steps": self.step_count,
+            "t": self.t,
+            "wall_s": wall,
+            "wall_s_per_module": dict(self.wall),
+            "particle_steps_per_s": n * len(dts) / wall if wall > 0 else None,
+            "dt": {"min": float(dts.min()), "max": float(dts.max()), "mean": float(dts.mean()),
+                   "controlling_limit_counts": limiter_counts},
+            "neighbors": {"pairs": self.nbrs.n_pairs, "mean_per_particle": self.nbrs.n_pairs / n
+                          if n else 0.0},
+            "diagnostics": {m.name: m.diagnostics(self) for m in self.modules},
+        }
+
+    def save_checkpoint(self, path: Path, series: ParticleSeries) -> None:
+        """Atomically store the particle state, time, step count and output series."""
+        import io
+
+        buf = io.BytesIO()
+        arrays = {f"f_{k}": v for k, v in self.particles.fields.items()}
+        np.savez(buf, t=self.t, step=self.step_count,
+                 series_t=np.array([e[0] for e in series.entries]),
+                 series_f=np.array([e[1] for e in series.entries]), **arrays)
+        atomic_write_bytes(path, buf.getvalue())
+
+    def load_checkpoint(self, path: Path) -> None:
+        with np.load(path) as z:
+            self.t = float(z["t"])
+            self.step_count = int(z["step"])
+            for k in z.files:
+                if k.startswith("f_"):
+                    self.particles.fields[k[2:]] = np.ascontiguousarray(z[k])
+            self._series_entries = list(zip(z["series_t"].tolist(), z["series_f"].tolist(),
+                                            strict=True))
+        self.update_neighbors()
+        for mod in self.modules:
+            mod.init(self)
