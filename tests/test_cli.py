@@ -1,0 +1,52 @@
+"""Command-line contract: exit codes, JSON layout, one-line errors."""
+
+import json
+import subprocess
+import sys
+
+import pytest
+
+from sphfem.cli import main
+
+
+def test_help_exits_zero(capsys):
+    assert main(["--help"]) == 0
+    assert "validate" in capsys.readouterr().out
+
+
+def test_no_command_is_usage_error(capsys):
+    assert main([]) == 2
+
+
+def test_validate_list(capsys):
+    assert main(["validate", "--list"]) == 0
+    out = capsys.readouterr().out
+    assert "laplacian" in out and "gradient" in out
+
+
+def test_unknown_case_is_usage_error(capsys):
+    assert main(["validate", "no-such-case"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "no-such-case" in err[0]
+
+
+@pytest.mark.parametrize("case", ["laplacian", "gradient"])
+def test_validate_json_contract(case, tmp_path, capsys):
+    f = tmp_path / f"{case}.json"
+    png = tmp_path / f"{case}.png"
+    assert main(["validate", case, "--quick", "--json", str(f), "--plot", str(png)]) == 0
+    d = json.loads(f.read_text())
+    assert d["case"] == case and d["passed"] is True
+    assert set(d) >= {"case", "runs", "observed_order", "criteria", "passed"}
+    for r in d["runs"]:
+        keys = {"variant", "resolution", "n_particles", "error_l2", "error_linf", "wall_s"}
+        assert set(r) >= keys
+    assert png.stat().st_size > 1000
+    out = capsys.readouterr().out
+    assert "PASSED" in out
+
+
+def test_console_script_entry_point():
+    r = subprocess.run([sys.executable, "-m", "sphfem.cli", "--help"], capture_output=True,
+                       text=True, timeout=120)
+    assert r.returncode == 0 and "run" in r.stdout
