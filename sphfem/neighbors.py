@@ -94,6 +94,8 @@ def _as_vector(a, dim, name):
         a = np.full(dim, a[0])
     if a.shape[0] != dim:
         raise ValueError(f"{name} must have {dim} entries, got {a.shape[0]}")
+    if not np.isfinite(a).all():
+        raise ValueError(f"{name} must be finite, got {a}")
     return a
 
 
@@ -110,34 +112,29 @@ def _check_positions(x) -> np.ndarray:
     return x
 
 
-def _make_grid(x, radius, lo, hi, period, cells_per_radius, max_cells) -> _Grid:
-    n, dim = x.shape
+def _make_grid(n, radius, lo, hi, period, cells_per_radius) -> _Grid:
+    """Cells of width >= radius / cells_per_radius over [lo, hi] (periodic: [lo, lo + L))."""
+    dim = lo.shape[0]
     cw = radius / cells_per_radius * (1.0 + _SLACK)
     origin = np.zeros(3)
     width = np.ones(3)
     ncell = np.ones(3, dtype=np.int64)
     per = np.zeros(3)
     span = np.zeros(3)
-    xmin = x.min(axis=0) if n else lo.copy()
-    xmax = x.max(axis=0) if n else lo.copy()
     for k in range(dim):
         K = 3 - dim + k
+        origin[K] = lo[k]
         if period[k] > 0:
-            L = float(period[k])
-            per[K] = L
-            origin[K] = lo[k]
-            ncell[K] = max(1, int(np.floor(L / cw)))
-            width[K] = L / ncell[K]
-        else:
-            # grid over the part of [lo, hi] that holds particles; outliers are clamped
-            g0 = min(max(lo[k], xmin[k]), hi[k])
-            g1 = max(min(hi[k], xmax[k]), g0)
-            origin[K] = g0
-            span[K] = g1 - g0
+            per[K] = period[k]
+            ncell[K] = max(1, int(np.floor(per[K] / cw)))
+            width[K] = per[K] / ncell[K]
+        else:  # particles outside [lo, hi] are clamped into the edge cells
+            span[K] = max(hi[k] - lo[k], 0.0)
             width[K] = cw
-            ncell[K] = int(np.floor(span[K] / cw)) + 1
+            ncell[K] = int(min(np.floor(span[K] / cw), 2**40)) + 1
     # cap the cell count (a huge domain with few particles): widen the busiest axis
-    while np.prod(ncell) > max_cells:
+    max_cells = max(4 * n, 1 << 16)
+    while np.prod(ncell.astype(np.float64)) > max_cells:
         K = int(np.argmax(ncell))
         if per[K] > 0:
             ncell[K] = max(1, ncell[K] // 2)
@@ -155,20 +152,26 @@ def _make_grid(x, radius, lo, hi, period, cells_per_radius, max_cells) -> _Grid:
 
 
 @njit(cache=True, parallel=True)
-def _cell_coords(x, origin, width, ncell, period, cc):
-    """Padded 3-axis cell coordinates ``cc`` (n, 3) and linear row-major cell ids."""
+def _cell_coords(x, origin, width, ncell, period):
+    """Padded cell coordinates ``cc`` (n, 3), linear row-major ids, and the positions
+    ``xw`` (3, n) wrapped into the box on periodic axes (zero on padded axes)."""
     n, dim = x.shape
     off = 3 - dim
+    cc = np.zeros((n, 3), dtype=np.int64)
+    xw = np.zeros((3, n))
     cid = np.empty(n, dtype=np.int64)
     for i in prange(n):
-        for K in range(off):
-            cc[i, K] = 0
         for k in range(dim):
             K = off + k
             y = x[i, k] - origin[K]
             L = period[K]
             if L > 0.0:
                 y -= L * np.floor(y / L)
+                if y >= L:  # rounding of a tiny negative y
+                    y = 0.0
+                xw[K, i] = origin[K] + y
+            else:
+                xw[K, i] = x[i, k]
             c = np.floor(y / width[K])
             if c < 0.0:
                 c = 0.0
@@ -177,7 +180,7 @@ def _cell_coords(x, origin, width, ncell, period, cc):
                 c = top
             cc[i, K] = np.int64(c)
         cid[i] = (cc[i, 0] * ncell[1] + cc[i, 1]) * ncell[2] + cc[i, 2]
-    return cid
+    return cc, xw, cid
 
 
 @njit(cache=True)
@@ -199,117 +202,146 @@ def _counting_sort(cid, ncells):
 
 
 @njit(cache=True, parallel=True)
-def _gather_rows(x, order):
-    n, dim = x.shape
-    xs = np.empty((n, dim))
+def _gather_columns(xw, order):
+    """Positions in cell order, one contiguous row per axis (3, n)."""
+    n = order.shape[0]
+    xs = np.empty((3, n))
     for p in prange(n):
         j = order[p]
-        for k in range(dim):
-            xs[p, k] = x[j, k]
+        xs[0, p] = xw[0, j]
+        xs[1, p] = xw[1, j]
+        xs[2, p] = xw[2, j]
     return xs
 
 
 @njit(cache=True, inline="always")
-def _axis_range(c, s, nc, L):
-    """First and last (unwrapped) cell on one axis, and whether indices must be wrapped."""
+def _axis_span(c, s, nc, L):
+    """First and last unwrapped cell visited on one axis (clamped unless periodic)."""
     if L > 0.0:
-        if 2 * s + 1 >= nc:
-            return 0, nc - 1, False
-        return c - s, c + s, True
+        return c - s, c + s
     a = c - s
     b = c + s
-    if a < 0:
-        a = 0
-    if b > nc - 1:
-        b = nc - 1
-    return a, b, False
+    return max(a, 0), min(b, nc - 1)
 
 
 @njit(cache=True, inline="always")
-def _row_ranges(c, s, nc, L):
-    """Up to two ascending, wrapped cell ranges [b0, e0], [b1, e1] on the last axis."""
-    a, b, wrap = _axis_range(c, s, nc, L)
-    if wrap:
-        if a < 0:
-            return 0, b, a + nc, nc - 1
-        if b >= nc:
-            return 0, b - nc, a, nc - 1
-    return a, b, 0, -1
+def _image(a, nc, L):
+    """Wrapped cell ``aa`` of unwrapped cell ``a`` and the image shift ``kk * L``."""
+    if L > 0.0:
+        kk = a // nc
+        return a - kk * nc, kk * L
+    return a, 0.0
+
+
+# Hot loops index with unsigned integers: numba then skips its negative-index wraparound
+# code, which otherwise blocks vectorisation (4-7x slower candidate loops).
 
 
 @njit(cache=True, inline="always")
-def _dist2(xs, p, xi0, xi1, xi2, L0, L1, L2, dim):
-    d = min_image(xi0 - xs[p, 0], L0)
-    r2 = d * d
-    if dim > 1:
-        d = min_image(xi1 - xs[p, 1], L1)
-        r2 += d * d
-    if dim > 2:
-        d = min_image(xi2 - xs[p, 2], L2)
-        r2 += d * d
-    return r2
+def _count_run(x0, x1, x2, ps, pe, y0, y1, y2, r2max):
+    k = 0
+    for p in range(np.uint64(ps), np.uint64(pe)):
+        d0 = y0 - x0[p]
+        d1 = y1 - x1[p]
+        d2 = y2 - x2[p]
+        k += d0 * d0 + d1 * d1 + d2 * d2 <= r2max
+    return k
 
 
-@njit(cache=True, parallel=True, fastmath=FASTMATH)
-def _neighbor_pass(x, xs, order, rank, cc, cell_start, ncell, reach, period, r2max, offsets, out):
-    """Count (``out`` empty) or fill (``out`` sized by ``offsets``) every particle's segment.
+@njit(cache=True, inline="always")
+def _fill_run(x0, x1, x2, ps, pe, y0, y1, y2, r2max, pself, order, buf, k):
+    # branch-free compaction: always store, advance only on a hit (buf has a spare slot)
+    for p in range(np.uint64(ps), np.uint64(pe)):
+        d0 = y0 - x0[p]
+        d1 = y1 - x1[p]
+        d2 = y2 - x2[p]
+        buf[np.uint64(k)] = order[p]
+        k += (d0 * d0 + d1 * d1 + d2 * d2 <= r2max) & (p != pself)
+    return k
 
-    Returns the per-particle neighbour counts.  Particles are processed independently, each
-    writing only its own segment, so the pass is race free.
+
+# The passes below use strict IEEE maths (no fastmath): counting and filling must agree bit
+# for bit on r^2 <= R^2, whatever the vectorisation of the count loop.
+
+
+@njit(cache=True, inline="always")
+def _stencil(i, xs, order, rank, cc, cell_start, ncell, reach, period, r2max, buf, fill):
+    """Hits of particle ``i`` over its cell stencil, stored in ``buf`` when ``fill``.
+
+    Counting includes ``i`` itself; filling skips it.  The image of a periodic cell is
+    reached by shifting the centre, so no minimum image is needed per candidate, and a box
+    of only one or two cells is handled by visiting each (cell, image) pair once.
     """
-    n, dim = x.shape
-    off = 3 - dim
-    fill = out.shape[0] > 0
     n0, n1, n2 = ncell[0], ncell[1], ncell[2]
-    s0, s1, s2 = reach[0], reach[1], reach[2]
-    P0, P1, P2 = period[0], period[1], period[2]
-    L0 = period[off]
-    L1 = period[off + 1] if dim > 1 else 0.0
-    L2 = period[off + 2] if dim > 2 else 0.0
-    counts = np.zeros(n, dtype=np.int64)
+    L0, L1, L2 = period[0], period[1], period[2]
+    x0 = xs[0]
+    x1 = xs[1]
+    x2 = xs[2]
+    pi = rank[i]
+    a_lo, a_hi = _axis_span(cc[i, 0], reach[0], n0, L0)
+    b_lo, b_hi = _axis_span(cc[i, 1], reach[1], n1, L1)
+    e_lo, e_hi = _axis_span(cc[i, 2], reach[2], n2, L2)
+    k = 0
+    for a in range(a_lo, a_hi + 1):
+        aa, sh0 = _image(a, n0, L0)
+        y0 = x0[pi] - sh0
+        for b in range(b_lo, b_hi + 1):
+            bb, sh1 = _image(b, n1, L1)
+            y1 = x1[pi] - sh1
+            row = (aa * n1 + bb) * n2
+            e = e_lo
+            while e <= e_hi:  # runs of consecutive last-axis cells with one image each
+                ee, sh2 = _image(e, n2, L2)
+                run = min(e_hi - e, n2 - 1 - ee)
+                y2 = x2[pi] - sh2
+                ps = cell_start[row + ee]
+                pe = cell_start[row + ee + run + 1]
+                if fill:
+                    k = _fill_run(x0, x1, x2, ps, pe, y0, y1, y2, r2max, pi, order, buf, k)
+                else:
+                    k += _count_run(x0, x1, x2, ps, pe, y0, y1, y2, r2max)
+                e += run + 1
+    return k
+
+
+@njit(cache=True, parallel=True)
+def _count_pass(xs, order, rank, cc, cell_start, ncell, reach, period, r2max):
+    """Number of neighbours of every particle (self excluded)."""
+    n = order.shape[0]
+    counts = np.empty(n, dtype=np.int64)
+    dummy = np.empty(0, dtype=np.int32)
     for i in prange(n):
-        xi0 = x[i, 0]
-        xi1 = x[i, 1] if dim > 1 else 0.0
-        xi2 = x[i, 2] if dim > 2 else 0.0
-        ri = rank[i]
-        a0, a1, w0 = _axis_range(cc[i, 0], s0, n0, P0)
-        b0, b1, w1 = _axis_range(cc[i, 1], s1, n1, P1)
-        e0, e1, f0, f1 = _row_ranges(cc[i, 2], s2, n2, P2)
-        k = 0
-        base = offsets[i] if fill else 0
-        for a in range(a0, a1 + 1):
-            aa = a % n0 if w0 else a
-            for b in range(b0, b1 + 1):
-                bb = b % n1 if w1 else b
-                row = (aa * n1 + bb) * n2
-                for r in range(2):
-                    lo_c = e0 if r == 0 else f0
-                    hi_c = e1 if r == 0 else f1
-                    if hi_c < lo_c:
-                        continue
-                    pstart = cell_start[row + lo_c]
-                    pend = cell_start[row + hi_c + 1]
-                    for p in range(pstart, pend):
-                        r2 = _dist2(xs, p, xi0, xi1, xi2, L0, L1, L2, dim)
-                        if r2 <= r2max and p != ri:
-                            if fill:
-                                out[base + k] = order[p]
-                            k += 1
-        counts[i] = k
+        k = _stencil(i, xs, order, rank, cc, cell_start, ncell, reach, period, r2max, dummy, False)
+        counts[i] = k - 1
     return counts
 
 
 @njit(cache=True, parallel=True)
-def _sort_segments(offsets, indices):
-    """Sort every particle's segment ascending (a check only, when particles are cell-sorted)."""
-    n = offsets.shape[0] - 1
-    for i in prange(n):
-        s = offsets[i]
-        e = offsets[i + 1]
-        for q in range(s + 1, e):
-            if indices[q] < indices[q - 1]:
-                indices[s:e].sort()
-                break
+def _fill_pass(xs, order, rank, cc, cell_start, ncell, reach, period, r2max, offsets, out):
+    """Write every particle's sorted neighbours into ``out[offsets[i]:offsets[i+1]]``.
+
+    Particles are split into contiguous chunks with one scratch row each (the branch-free
+    compaction writes one slot past the last hit); each particle then copies its hits into
+    its own segment, so the pass is race free and independent of the thread count.
+    """
+    n = order.shape[0]
+    width = 1
+    for i in range(n):
+        width = max(width, offsets[i + 1] - offsets[i] + 1)
+    nchunk = max(1, min(n, 256, (1 << 24) // width))
+    scratch = np.empty((nchunk, width), dtype=np.int32)
+    for t in prange(nchunk):
+        buf = scratch[t]
+        for i in range(t * n // nchunk, (t + 1) * n // nchunk):
+            k = _stencil(i, xs, order, rank, cc, cell_start, ncell, reach, period, r2max, buf, True)
+            base = offsets[i]
+            ordered = True
+            for q in range(k):
+                out[base + q] = buf[q]
+                if q > 0 and buf[q] < buf[q - 1]:
+                    ordered = False
+            if not ordered:  # only when particles are not cell-sorted, or across a period
+                out[base : base + k].sort()
 
 
 # ----------------------------------------------------------------------------- public API
@@ -340,8 +372,6 @@ def build_neighbor_list(
     lo = _as_vector(lo, dim, "lo")
     hi = _as_vector(hi, dim, "hi")
     period = np.zeros(dim) if period is None else _as_vector(period, dim, "period")
-    if not (np.isfinite(lo).all() and np.isfinite(hi).all() and np.isfinite(period).all()):
-        raise ValueError("domain bounds and periods must be finite")
     if np.any(period < 0):
         raise ValueError(f"periods must be >= 0 (0: not periodic), got {period}")
     for k in range(dim):
@@ -353,68 +383,47 @@ def build_neighbor_list(
         raise ValueError("cells_per_radius must be 1, 2 or 3")
     if n == 0:
         return NeighborList(np.zeros(1, np.int64), np.zeros(0, np.int32), radius, period)
-    if n > np.iinfo(np.int32).max:
+    if n >= np.iinfo(np.int32).max:
         raise ValueError("too many particles for int32 neighbour indices")
 
-    g = _make_grid(x, radius, lo, hi, period, cells_per_radius, max(4 * n, 1 << 16))
-    cc = np.empty((n, 3), dtype=np.int64)
-    cid = _cell_coords(x, g.origin, g.width, g.ncell, g.period, cc)
+    g = _make_grid(n, radius, lo, hi, period, cells_per_radius)
+    cc, xw, cid = _cell_coords(x, g.origin, g.width, g.ncell, g.period)
     order, cell_start = _counting_sort(cid, int(np.prod(g.ncell)))
     rank = np.empty(n, dtype=np.int64)
     rank[order] = np.arange(n)
-    xs = _gather_rows(x, order)
+    xs = _gather_columns(xw, order)
+    order32 = order.astype(np.int32)
     r2max = radius * radius
-    args = (x, xs, order, rank, cc, cell_start, g.ncell, g.reach, g.period, r2max)
-    counts = _neighbor_pass(*args, np.zeros(1, np.int64), np.zeros(0, np.int32))
+    args = (xs, order32, rank, cc, cell_start, g.ncell, g.reach, g.period, r2max)
+    counts = _count_pass(*args)
     offsets = np.zeros(n + 1, dtype=np.int64)
     np.cumsum(counts, out=offsets[1:])
     indices = np.empty(int(offsets[-1]), dtype=np.int32)
     if indices.shape[0]:
-        _neighbor_pass(*args, offsets, indices)
-        _sort_segments(offsets, indices)
+        _fill_pass(*args, offsets, indices)
     return NeighborList(offsets, indices, radius, period)
 
 
-@njit(cache=True, parallel=True)
-def _sort_keys(x, lo, cell_size, ncell):
-    n, dim = x.shape
-    cid = np.empty(n, dtype=np.int64)
-    for i in prange(n):
-        c = 0
-        for k in range(dim):
-            f = np.floor((x[i, k] - lo[k]) / cell_size)
-            if f < 0.0:
-                f = 0.0
-            if f > ncell[k] - 1:
-                f = ncell[k] - 1
-            c = c * ncell[k] + np.int64(f)
-        cid[i] = c
-    return cid
-
-
-def cell_sort_permutation(x, cell_size, lo, hi) -> np.ndarray:
+def cell_sort_permutation(x, cell_size, lo, hi, period=None) -> np.ndarray:
     """Permutation (int64) ordering particles by row-major cell, last axis fastest.
 
-    Stable: particles in one cell keep their relative order.  Apply with
-    ``particles.reorder(perm)`` (new index k holds old particle ``perm[k]``).  Use the
-    neighbour-search radius (or a multiple) as ``cell_size``; positions outside
-    ``[lo, hi]`` are clamped to the edge cells.
+    The cells are those :func:`build_neighbor_list` uses for ``radius = cell_size`` (with
+    ``cells_per_radius=1``; pass ``radius / c`` for ``cells_per_radius=c``), so after
+    ``particles.reorder(perm)`` the search reads candidates contiguously and finds every
+    neighbour segment already sorted.  Stable: particles in one cell keep their order.
+    Positions outside ``[lo, hi]`` go to the edge cells (wrapped on periodic axes).
     """
     x = _check_positions(x)
     n, dim = x.shape
+    cell_size = float(cell_size)
     if not (np.isfinite(cell_size) and cell_size > 0):
         raise ValueError(f"cell size must be positive and finite, got {cell_size}")
     lo = _as_vector(lo, dim, "lo")
     hi = _as_vector(hi, dim, "hi")
-    cell_size = float(cell_size)
-    cap = max(4 * n, 1 << 16)
-    while True:
-        ncell = np.maximum(1, np.floor((hi - lo) / cell_size).astype(np.int64) + 1)
-        if np.prod(ncell.astype(float)) <= cap:
-            break
-        cell_size *= 2.0
+    period = np.zeros(dim) if period is None else _as_vector(period, dim, "period")
     if n == 0:
         return np.zeros(0, dtype=np.int64)
-    cid = _sort_keys(x, lo, cell_size, ncell)
-    order, _ = _counting_sort(cid, int(np.prod(ncell)))
+    g = _make_grid(n, cell_size, lo, hi, period, 1)
+    _, _, cid = _cell_coords(x, g.origin, g.width, g.ncell, g.period)
+    order, _ = _counting_sort(cid, int(np.prod(g.ncell)))
     return order

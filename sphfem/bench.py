@@ -1,0 +1,228 @@
+"""Micro-benchmarks of the hot kernels: neighbour search and summation density.
+
+``run_bench(name)`` builds 3D lattice blocks (spacing dx, support radius R = 3 dx, the
+thesis setting, ~123 neighbours per interior particle), sorts them by cell once (as a
+simulation does every few steps), and times, after a warm-up call that compiles:
+
+* ``build_s``: building the CSR neighbour list (min over repeats);
+* ``density_s``: one summation-density pass over that list (min over repeats);
+* ``pairs``: directed pairs (i, j), i != j, r <= R;
+* ``pairs_per_s``: pairs / density_s, the pair-interaction rate of the density pass;
+* ``particle_steps_per_s``: n / (build_s + density_s), a "step" being one neighbour build
+  and one density pass;
+* ``search_share``: build_s / (build_s + density_s).
+
+Run ``python -m sphfem.bench neighbors [--json FILE] [--quick]`` or ``sphfem bench NAME``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import json
+import os
+import platform
+import time
+
+import numba
+import numpy as np
+
+from sphfem.density import summation_density
+from sphfem.kernels import WENDLAND_C2, kernel_sigma
+from sphfem.neighbors import build_neighbor_list, cell_sort_permutation
+
+BENCHES = ("neighbors", "density")
+QUICK_SIZES = (20_000,)
+
+
+def machine_info() -> dict:
+    """CPU model, core count, numba/numpy versions and the numba thread limit."""
+    cpu = platform.processor() or "unknown"
+    try:
+        with open("/proc/cpuinfo") as f:
+            for line in f:
+                if line.startswith("model name"):
+                    cpu = line.split(":", 1)[1].strip()
+                    break
+    except OSError:
+        pass
+    return {
+        "cpu": cpu,
+        "cores": os.cpu_count(),
+        "numba": numba.__version__,
+        "numpy": np.__version__,
+        "python": platform.python_version(),
+        "numba_max_threads": numba.config.NUMBA_NUM_THREADS,
+        "threading_layer": _threading_layer(),
+        "date": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+    }
+
+
+def _threading_layer() -> str:
+    try:
+        return numba.threading_layer()
+    except ValueError:  # no parallel function has run yet
+        return "not initialised"
+
+
+def lattice_block(n_target: int, dx: float = 1.0) -> np.ndarray:
+    """A cubic lattice block of about ``n_target`` particles, spacing ``dx`` (n, 3)."""
+    k = max(2, round(n_target ** (1.0 / 3.0)))
+    g = np.arange(k) * dx
+    x = np.stack([a.ravel() for a in np.meshgrid(g, g, g, indexing="ij")], axis=1)
+    return np.ascontiguousarray(x)
+
+
+def _best(fn, repeats: int) -> tuple[float, object]:
+    best = np.inf
+    out = None
+    for _ in range(repeats):
+        t0 = time.perf_counter()
+        out = fn()
+        best = min(best, time.perf_counter() - t0)
+    return best, out
+
+
+def _one_case(n_target: int, nthreads: int, repeats: int, cells_per_radius: int) -> dict:
+    dx = 1.0
+    R = 3.0 * dx
+    x = lattice_block(n_target, dx)
+    # shuffle, then sort by cell once, as a simulation would every few steps
+    x = x[np.random.default_rng(1).permutation(x.shape[0])]
+    lo = x.min(axis=0) - 0.5 * dx
+    hi = x.max(axis=0) + 0.5 * dx
+    period = np.zeros(3)
+    t0 = time.perf_counter()
+    perm = cell_sort_permutation(x, R, lo, hi)
+    x = np.ascontiguousarray(x[perm])
+    sort_s = time.perf_counter() - t0
+    n = x.shape[0]
+    m = np.full(n, dx**3)
+    sigma = kernel_sigma(WENDLAND_C2, 3, R)
+
+    numba.set_num_threads(nthreads)
+
+    def build():
+        return build_neighbor_list(x, R, lo, hi, period, cells_per_radius=cells_per_radius)
+
+    build()  # warm-up (compile / load cache, first-touch of memory)
+    build_s, nl = _best(build, repeats)
+
+    def dens():
+        return summation_density(x, m, nl.offsets, nl.indices, R, sigma, WENDLAND_C2, period)
+
+    dens()
+    density_s, rho = _best(dens, repeats)
+    interior = np.all((x > lo + R) & (x < hi - R), axis=1)
+    rho_err = float(np.max(np.abs(rho[interior] - 1.0))) if interior.any() else float("nan")
+    return {
+        "n": int(n),
+        "threads": int(nthreads),
+        "radius_over_dx": 3.0,
+        "cells_per_radius": int(cells_per_radius),
+        "sort_s": sort_s,
+        "build_s": build_s,
+        "pairs": nl.n_pairs,
+        "pairs_per_particle": nl.n_pairs / n,
+        "build_pairs_per_s": nl.n_pairs / build_s,
+        "density_s": density_s,
+        "pairs_per_s": nl.n_pairs / density_s,
+        "particle_steps_per_s": n / (build_s + density_s),
+        "search_share": build_s / (build_s + density_s),
+        "density_max_rel_err_interior": rho_err,
+    }
+
+
+def run_bench(
+    name: str,
+    sizes=(100_000, 1_000_000),
+    threads=(1, 2),
+    *,
+    quick: bool = False,
+    repeats: int | None = None,
+    cells_per_radius: int = 1,
+    verbose: bool = True,
+) -> dict:
+    """Run benchmark ``name`` ("neighbors" or "density"); returns a JSON-serialisable dict.
+
+    Both names time the same cases (neighbour build and density pass, since the density
+    pass needs the list); ``name`` selects which figures are printed first.  ``quick``
+    uses ~2e4 particles and 2 repeats (for tests).
+    """
+    if name not in BENCHES:
+        raise ValueError(f"unknown benchmark {name!r}; expected one of {BENCHES}")
+    if quick:
+        sizes = QUICK_SIZES
+    if repeats is None:
+        repeats = 2 if quick else 3
+    max_threads = numba.config.NUMBA_NUM_THREADS
+    threads = [t for t in threads if 1 <= t <= max_threads] or [1]
+    saved = numba.get_num_threads()
+    cases = []
+    try:
+        for n in sizes:
+            for t in threads:
+                cases.append(_one_case(int(n), int(t), repeats, cells_per_radius))
+    finally:
+        numba.set_num_threads(saved)
+    result = {
+        "benchmark": name,
+        "machine": machine_info(),
+        "setup": "3D cubic lattice block, R = 3 dx, Wendland C2, non-periodic, cell-sorted",
+        "repeats": repeats,
+        "cases": cases,
+    }
+    if verbose:
+        print(format_table(result))
+    return result
+
+
+def format_table(result: dict) -> str:
+    """The cases of a :func:`run_bench` result as a fixed-width text table."""
+    mi = result["machine"]
+    head = (
+        f"{result['benchmark']}: {result['setup']}\n"
+        f"cpu: {mi['cpu']} ({mi['cores']} cores), numba {mi['numba']}, {mi['date']}\n"
+    )
+    cols = (
+        f"{'n':>9} {'thr':>3} {'build s':>9} {'pairs':>11} {'build pairs/s':>13} "
+        f"{'density s':>9} {'pairs/s':>9} {'particle-steps/s':>16} {'search %':>8}"
+    )
+    rows = [head + cols, "-" * len(cols)]
+    for c in result["cases"]:
+        rows.append(
+            f"{c['n']:>9} {c['threads']:>3} {c['build_s']:>9.4f} {c['pairs']:>11} "
+            f"{c['build_pairs_per_s']:>13.3e} {c['density_s']:>9.4f} {c['pairs_per_s']:>9.3e} "
+            f"{c['particle_steps_per_s']:>16.3e} {100 * c['search_share']:>8.1f}"
+        )
+    return "\n".join(rows)
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(prog="python -m sphfem.bench", description=__doc__.split("\n")[0])
+    p.add_argument("name", choices=BENCHES)
+    p.add_argument("--json", metavar="FILE", help="write the results as JSON")
+    p.add_argument("--quick", action="store_true", help="small sizes (~2e4 particles)")
+    p.add_argument("--sizes", type=int, nargs="+", default=[100_000, 1_000_000])
+    p.add_argument("--threads", type=int, nargs="+", default=[1, 2])
+    p.add_argument("--repeats", type=int, default=None)
+    p.add_argument("--cells-per-radius", type=int, default=1, choices=(1, 2, 3))
+    a = p.parse_args(argv)
+    res = run_bench(
+        a.name,
+        sizes=tuple(a.sizes),
+        threads=tuple(a.threads),
+        quick=a.quick,
+        repeats=a.repeats,
+        cells_per_radius=a.cells_per_radius,
+    )
+    if a.json:
+        tmp = a.json + ".tmp"
+        with open(tmp, "w") as f:
+            json.dump(res, f, indent=2)
+        os.replace(tmp, a.json)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
