@@ -1,0 +1,155 @@
+"""The discrete conduction system on a fixed particle set: ghost rules, rate, matrix.
+
+Particles are of three roles (masks over the full set, ghosts included):
+
+* ``active`` -- real particles whose temperature evolves,
+* ghosts     -- ``ghost_index`` with a rule per ghost (:mod:`sphfem.heat.ghosts` codes):
+  Dirichlet ``hold`` T_g = T_w, Dirichlet ``antisymmetric`` T_g = 2 T_w - T_s, insulated
+  T_g = T_s, where s = ``ghost_source`` (an index into the full set),
+* anything else keeps its temperature (held particles).
+
+With the pair conductances g (:mod:`sphfem.heat.conduction`) the active temperatures obey
+
+    dT_a/dt = A T_a + f,   A = S L E,  f = S L b                                  (2)
+
+where L = diag(1/(rho c)) [g_ij (T_j - T_i)] is the full operator
+(:func:`sphfem.operators.pair_weights_matrix`), E maps active temperatures to all
+particles (identity on active rows, the ghost rule's +-1 on ghost rows), b holds the
+constant parts (2 T_w or T_w of Dirichlet ghosts, held temperatures) and S selects the
+active rows.  The explicit rate and this matrix are the same operator.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from sphfem import operators as op
+from sphfem.heat.conduction import pair_conductances
+from sphfem.heat.ghosts import DIRICHLET, INSULATED
+
+
+class HeatSystem:
+    """Conductances and ghost rules for a particle set that does not move.
+
+    ``kernel_args`` is the operators' common tail (x, vol, offsets, indices, R, sigma,
+    kind, period) over the full set (ghosts included); ``rho_c`` [J/(m^3 K)] and ``k``
+    [W/(m K)] are per particle (ghosts carry their source's values).  Use
+    rho_c = m c / V so that m c dT/dt = V sum_j g_ij (T_j - T_i) holds exactly.
+    """
+
+    def __init__(self, kernel_args, rho_c, k, active, ghost_index=None, ghost_type=None,
+                 ghost_source=None, ghost_t_wall=None, laplacian: str = "cleary",
+                 dirichlet_mode: str = "hold", plain_rows=None):
+        self.kernel_args = kernel_args
+        x, vol, offsets, indices = kernel_args[:4]
+        self.offsets, self.indices = offsets, indices
+        self.vol = vol
+        self.n = x.shape[0]
+        self.rho_c = np.ascontiguousarray(rho_c, dtype=np.float64)
+        self.k = np.ascontiguousarray(k, dtype=np.float64)
+        self.active = np.asarray(active, dtype=bool)
+        self.active_index = np.flatnonzero(self.active)
+        self.laplacian = laplacian
+        self.dirichlet_mode = dirichlet_mode
+        if dirichlet_mode not in ("hold", "antisymmetric"):
+            raise ValueError("dirichlet_mode must be 'hold' or 'antisymmetric'")
+        e = np.zeros(0, np.int64)
+        self.ghost_index = e if ghost_index is None else np.asarray(ghost_index, np.int64)
+        self.ghost_type = (np.zeros(0, np.int8) if ghost_type is None
+                           else np.asarray(ghost_type, np.int8))
+        self.ghost_source = e if ghost_source is None else np.asarray(ghost_source, np.int64)
+        self.ghost_t_wall = (np.zeros(0) if ghost_t_wall is None
+                             else np.asarray(ghost_t_wall, float))
+        if np.any(~self.active[self.ghost_source]):
+            raise ValueError("every ghost source must be an active particle")
+        self.plain_rows = (np.zeros(self.n, bool) if plain_rows is None
+                           else np.asarray(plain_rows, bool) & self.active)
+        self.g, ok = pair_conductances(self.k, *kernel_args, laplacian=laplacian,
+                                       plain_rows=self.plain_rows)
+        self.ok = ok
+        # fallbacks counted over active particles only (ghosts' rows are never used)
+        self.fallbacks = int((~ok[self.active]).sum())
+        # conductances to non-active neighbours (ghosts, held particles): boundary heat
+        self.g_outside = np.where(self.active[indices], 0.0, self.g)
+
+    # -- ghosts --------------------------------------------------------------------------
+    def apply_ghosts(self, T: np.ndarray) -> None:
+        """Write the ghost temperatures into ``T`` (full set) from the active ones."""
+        gi, gt, gs, tw = self.ghost_index, self.ghost_type, self.ghost_source, self.ghost_t_wall
+        d = gt == DIRICHLET
+        if self.dirichlet_mode == "hold":
+            T[gi[d]] = tw[d]
+        else:
+            T[gi[d]] = 2.0 * tw[d] - T[gs[d]]
+        s = gt == INSULATED
+        T[gi[s]] = T[gs[s]]
+
+    # -- operator ------------------------------------------------------------------------
+    def rate(self, T: np.ndarray) -> np.ndarray:
+        """dT/dt of every particle (zero where not active); ghosts must be up to date."""
+        r = op.apply_pair_weights(T, self.g, self.offsets, self.indices) / self.rho_c
+        r[~self.active] = 0.0
+        return r
+
+    def matrix(self, T_held: np.ndarray | None = None):
+        """(A, f) of eq. (2) on the active particles (A: CSR, n_active^2).
+
+        ``T_held`` supplies the temperatures of held (neither active nor ghost) particles.
+        """
+        n, na = self.n, self.active_index.size
+        col = np.full(n, -1, np.int64)
+        col[self.active_index] = np.arange(na)
+        rows, cols, vals = [self.active_index], [np.arange(na)], [np.ones(na)]
+        b = np.zeros(n)
+        held = self.active.copy()
+        held[self.ghost_index] = True
+        held = ~held
+        if T_held is not None:
+            b[held] = T_held[held]
+        gi, gt, gs, tw = self.ghost_index, self.ghost_type, self.ghost_source, self.ghost_t_wall
+        d = gt == DIRICHLET
+        s = gt == INSULATED
+        if self.dirichlet_mode == "hold":
+            b[gi[d]] = tw[d]
+        else:
+            b[gi[d]] = 2.0 * tw[d]
+            rows.append(gi[d])
+            cols.append(col[gs[d]])
+            vals.append(-np.ones(int(d.sum())))
+        rows.append(gi[s])
+        cols.append(col[gs[s]])
+        vals.append(np.ones(int(s.sum())))
+        E = sp.csr_matrix((np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
+                          shape=(n, na))
+        L = op.pair_weights_matrix(self.g, self.offsets, self.indices, scale=1.0 / self.rho_c)
+        La = L[self.active_index]
+        return (La @ E).tocsr(), La @ b
+
+    # -- time step -----------------------------------------------------------------------
+    def stable_dt(self) -> float:
+        """Explicit limit dt = 1 / max_i sum_j |g_ij| / (rho_i c_i) over active particles.
+
+        Gershgorin: every eigenvalue of A lies in [-2 max_i sum_j |g_ij|/(rho c)_i, 0]
+        for non-negative g, and forward Euler and Heun are stable for dt |lambda| <= 2.
+        On a lattice this is dt = C rho c dx^2 / k with C from :func:`lattice_constant`.
+        """
+        rows = np.repeat(np.arange(self.n), np.diff(self.offsets))
+        s = np.bincount(rows, weights=np.abs(self.g), minlength=self.n) / self.rho_c
+        smax = float(s[self.active].max()) if self.active.any() else 0.0
+        return 1.0 / smax if smax > 0 else np.inf
+
+    def boundary_heat_rate(self, T: np.ndarray) -> float:
+        """Heat entering the active particles from ghosts and held particles [W]:
+        sum_a V_a sum_{j not active} g_aj (T_j - T_a) (ghosts must be up to date).
+
+        With the Cleary form the active-active exchanges cancel pairwise, so
+        d/dt sum m c T equals this to round-off; see :class:`EnergyLedger`.
+        """
+        q = op.apply_pair_weights(T, self.g_outside, self.offsets, self.indices)
+        return float(np.sum(self.vol[self.active] * q[self.active]))
+
+    def energy(self, T: np.ndarray, m: np.ndarray, c: np.ndarray) -> float:
+        """Thermal energy sum_i m_i c_i T_i over the active particles [J]."""
+        a = self.active
+        return float(np.sum(m[a] * c[a] * T[a]))
