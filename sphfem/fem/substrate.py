@@ -1,0 +1,629 @@
+"""Quasi-static linear thermo-elastic substrate on a gmsh mesh, factorised once.
+
+>>> sub = FEMSubstrate("substrate.msh", E=300e9, nu=0.21, alpha=7e-6,
+...                    clamps=["bottom"], element="P1")
+>>> res = sub.solve(dT_nodal=dT, point_forces=(x_sensors, F_sensors))
+>>> res.u, res.stress_nodes, res.von_mises_nodes, res.probe(points)
+
+``K`` is assembled once in the constructor and the condensed matrix ``K_II`` (free dofs)
+is factorised once (``solver="direct"``: SuperLU in symmetric mode) or given an algebraic
+multigrid hierarchy once (``solver="cg-amg"``: pyamg smoothed aggregation with the rigid
+body modes as near-nullspace, conjugate gradients warm-started from the previous step).
+Every :meth:`FEMSubstrate.solve` re-assembles only the load vector and back-substitutes.
+
+Boundary conditions are named by gmsh physical group: ``clamps`` (all components zero) and
+``rollers`` (``{group: "z"}`` -- the listed components zero).  A body with no constraint
+at all is held by a statically determinate 3-2-1 pin set (``pin_rigid``), which removes
+the rigid motions without stressing the body.
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+import scipy.sparse as sp
+from scipy.sparse.linalg import splu
+from skfem import (
+    Basis,
+    ElementHex1,
+    ElementHex2,
+    ElementQuad1,
+    ElementQuad2,
+    ElementTetP1,
+    ElementTetP2,
+    ElementTriP1,
+    ElementTriP2,
+    ElementVector,
+    FacetBasis,
+    LinearForm,
+    Mesh,
+    MeshHex1,
+    MeshQuad1,
+    MeshTet1,
+    MeshTri1,
+)
+
+from sphfem.fem import forms
+
+logger = logging.getLogger(__name__)
+
+_ELEMENTS = {
+    (MeshTet1, "P1"): ElementTetP1, (MeshTet1, "P2"): ElementTetP2,
+    (MeshHex1, "P1"): ElementHex1, (MeshHex1, "P2"): ElementHex2,
+    (MeshTri1, "P1"): ElementTriP1, (MeshTri1, "P2"): ElementTriP2,
+    (MeshQuad1, "P1"): ElementQuad1, (MeshQuad1, "P2"): ElementQuad2,
+}
+_LINEAR_CELLS = {"tetra10": ("tetra", 4), "hexahedron20": ("hexahedron", 8),
+                 "hexahedron27": ("hexahedron", 8), "triangle6": ("triangle", 3),
+                 "quad8": ("quad", 4), "quad9": ("quad", 4), "line3": ("line", 2)}
+_COMPONENTS = {"x": 0, "y": 1, "z": 2}
+
+
+def load_mesh(path) -> Mesh:
+    """Read a gmsh ``.msh`` (or any meshio format) into a scikit-fem mesh.
+
+    Physical groups of the facets become ``mesh.boundaries``.  Second-order cells
+    (tetra10, ...) are reduced to their vertices (the recipes make straight-sided
+    meshes; use ``element="P2"`` for quadratic displacements), orphan nodes are dropped.
+    """
+    import meshio
+    from skfem.io.meshio import from_meshio
+
+    path = Path(path)
+    if not path.is_file():
+        raise FileNotFoundError(f"mesh file not found: {path}")
+    m = read_quiet(path)
+    cells = []
+    for block in m.cells:
+        if block.type in _LINEAR_CELLS:
+            t, n = _LINEAR_CELLS[block.type]
+            cells.append(meshio.CellBlock(t, block.data[:, :n]))
+        else:
+            cells.append(block)
+    used = np.zeros(len(m.points), bool)
+    for b in cells:
+        if b.type != "vertex":
+            used[b.data.ravel()] = True
+    remap = np.cumsum(used) - 1
+    cells = [meshio.CellBlock(b.type, remap[b.data]) for b in cells
+             if b.type != "vertex" or used[b.data].all()]
+    points = m.points[used]
+    dim3 = any(b.type in ("tetra", "hexahedron") for b in cells)
+    if not dim3:
+        points = points[:, :2]
+    keep = [i for i, b in enumerate(m.cells) if b.type != "vertex" or used[b.data].all()]
+    cell_sets = {k: [v[i] for i in keep] for k, v in m.cell_sets.items()}
+    mm = meshio.Mesh(points, cells, cell_sets=cell_sets)
+    mesh = from_meshio(mm)
+    if type(mesh) not in {k[0] for k in _ELEMENTS}:
+        raise ValueError(f"{path}: unsupported mesh type {type(mesh).__name__}")
+    return mesh
+
+
+def read_quiet(path):
+    """meshio.read without the blank line meshio's gmsh reader prints to stdout."""
+    import contextlib
+    import io
+
+    import meshio
+
+    with contextlib.redirect_stdout(io.StringIO()):
+        return meshio.read(path)
+
+
+def _component_indices(spec, dim: int) -> list[int]:
+    """'z' | 'xy' | 2 | [0, 2] -> sorted component indices."""
+    if isinstance(spec, (int, np.integer)):
+        items = [int(spec)]
+    elif isinstance(spec, str):
+        items = [_COMPONENTS.get(c, -1) for c in spec.lower()]
+    else:
+        items = [int(c) if not isinstance(c, str) else _COMPONENTS.get(c.lower(), -1)
+                 for c in spec]
+    if not items or any(c < 0 or c >= dim for c in items):
+        raise ValueError(f"roller components {spec!r}: use letters from "
+                         f"{'xyz'[:dim]!r} or indices < {dim}")
+    return sorted(set(items))
+
+
+def rigid_body_modes(x: np.ndarray, comp: np.ndarray) -> np.ndarray:
+    """Rigid body modes (N, 6) in 3D or (N, 3) in 2D at dofs with locations ``x`` (dim, N)
+    and component ``comp`` (N,)."""
+    dim, n = x.shape
+    xc = x - x.mean(axis=1, keepdims=True)
+    modes = [(comp == c).astype(float) for c in range(dim)]
+    if dim == 2:
+        modes.append(np.where(comp == 0, -xc[1], xc[0]))
+    else:
+        for a, b in ((0, 1), (1, 2), (2, 0)):  # rotation in the (a, b) plane
+            r = np.zeros(n)
+            r[comp == a] = -xc[b][comp == a]
+            r[comp == b] = xc[a][comp == b]
+            modes.append(r)
+    return np.column_stack(modes)
+
+
+@dataclass
+class FEMResult:
+    """One solve: displacement and stresses, computed lazily from the dof vector."""
+
+    substrate: FEMSubstrate
+    dofs: np.ndarray  #: full displacement dof vector
+    load: np.ndarray  #: assembled load vector f
+    dT_spec: object = None  #: the temperature change as given to solve()
+    info: dict = field(default_factory=dict)
+
+    @property
+    def u(self) -> np.ndarray:
+        """Displacement at the mesh vertices, (nvertices, dim)."""
+        return self.dofs[self.substrate.basis.nodal_dofs].T
+
+    @property
+    def dT_nodes(self) -> np.ndarray:
+        """Temperature change at the mesh vertices."""
+        return self.substrate._dT_at(self.dT_spec, self.substrate.mesh.p)
+
+    @property
+    def stress_qp(self) -> np.ndarray:
+        """Cauchy stress (3, 3, nelems, nqp) at the quadrature points."""
+        if "stress_qp" not in self.__dict__:
+            s = self.substrate
+            grad = s.basis.interpolate(self.dofs).grad
+            self.__dict__["stress_qp"] = forms.thermo_elastic_stress(
+                s.lam, s.mu, s.alpha, grad, s._dT_qp(self.dT_spec))
+        return self.__dict__["stress_qp"]
+
+    @property
+    def stress_elem(self) -> np.ndarray:
+        """Volume-averaged Cauchy stress per element, (nelems, 3, 3)."""
+        dx = self.substrate.basis.dx
+        s = (self.stress_qp * dx).sum(axis=-1) / dx.sum(axis=-1)
+        return np.moveaxis(s, -1, 0)
+
+    @property
+    def stress_nodes(self) -> np.ndarray:
+        """Cauchy stress L2-projected onto the P1 vertex field, (nvertices, 3, 3)."""
+        if "stress_nodes" not in self.__dict__:
+            self.__dict__["stress_nodes"] = self.substrate.project_tensor(self.stress_qp)
+        return self.__dict__["stress_nodes"]
+
+    @property
+    def von_mises_nodes(self) -> np.ndarray:
+        return forms.von_mises(np.moveaxis(self.stress_nodes, 0, -1))
+
+    @property
+    def von_mises_elem(self) -> np.ndarray:
+        dx = self.substrate.basis.dx
+        return (forms.von_mises(self.stress_qp) * dx).sum(axis=-1) / dx.sum(axis=-1)
+
+    @property
+    def residual(self) -> np.ndarray:
+        """K u - f: the reaction forces at constrained dofs, ~0 elsewhere."""
+        return self.substrate.K @ self.dofs - self.load
+
+    def reaction(self, group: str) -> np.ndarray:
+        """Total reaction force (dim,) on the dofs of boundary ``group``."""
+        s = self.substrate
+        r = self.residual
+        dofs = s._group_dofs(group)
+        return np.array([r[np.intersect1d(dofs, s.component_dofs[c])].sum()
+                         for c in range(s.dim)])
+
+    def probe(self, points) -> dict:
+        """Displacement, stress (from the displacement gradient, not the projection) and
+        von Mises at arbitrary points inside the mesh, ``points`` (n, dim)."""
+        s = self.substrate
+        X = np.atleast_2d(np.asarray(points, float)).T
+        cells, pts = s._locate(X)
+        b = s.basis
+        n = X.shape[1]
+        u = np.zeros((s.dim, n))
+        grad = np.zeros((s.dim, s.dim, n))
+        for k in range(b.Nbfun):
+            phi = b.elem.gbasis(b.mapping, pts, k, tind=cells)[0]
+            coef = self.dofs[b.element_dofs[k, cells]]
+            u += phi.value[..., 0] * coef
+            grad += phi.grad[..., 0] * coef
+        dT = s._dT_at(self.dT_spec, X)
+        S = forms.thermo_elastic_stress(s.lam, s.mu, s.alpha, grad, dT)
+        return {"u": u.T, "stress": np.moveaxis(S, -1, 0), "von_mises": forms.von_mises(S),
+                "dT": dT}
+
+
+class FEMSubstrate:
+    """Linear thermo-elastic quasi-static substrate; K assembled and factorised once.
+
+    Parameters
+    ----------
+    mesh : path of a mesh file (gmsh .msh via meshio) or a scikit-fem mesh with named
+        ``boundaries``.
+    E, nu, alpha : Young's modulus [Pa], Poisson ratio, linear expansion [1/K].
+    T0 : reference temperature [K] (``solve(T_nodal=...)`` uses dT = T - T0).
+    element : "P1" (linear) or "P2" (quadratic) displacement; tets, hexes (Q1/Q2),
+        triangles and quads (2D = plane strain).
+    clamps : group names where every displacement component is zero.
+    rollers : ``{group: components}``, e.g. ``{"bottom": "z", "left": "x"}``.
+    solver : "direct" (SuperLU, factorised once) or "cg-amg" (pyamg preconditioner built
+        once, CG warm-started from the previous solution).
+    pin_rigid : hold rigid motions by a 3-2-1 pin set; default: only when nothing else
+        constrains the body.
+    rtol, maxiter : CG stopping criterion (relative residual) and iteration cap.
+    nthreads : threads for the stiffness assembly.
+    """
+
+    def __init__(self, mesh, E: float, nu: float, alpha: float, T0: float = 293.15,
+                 element: str = "P1", clamps=(), rollers=None, solver: str = "direct",
+                 pin_rigid: bool | None = None, rtol: float = 1e-10, maxiter: int = 2000,
+                 nthreads: int | None = None):
+        t0 = time.perf_counter()
+        self.timings: dict[str, float] = {}
+        if isinstance(mesh, (str, os.PathLike)):
+            self.mesh_path = Path(mesh)
+            mesh = load_mesh(mesh)
+        else:
+            self.mesh_path = None
+        self.mesh = mesh
+        self.timings["load_mesh"] = time.perf_counter() - t0
+        if element not in ("P1", "P2"):
+            raise ValueError(f"element must be 'P1' or 'P2', got {element!r}")
+        if solver not in ("direct", "cg-amg"):
+            raise ValueError(f"solver must be 'direct' or 'cg-amg', got {solver!r}")
+        if not (E > 0 and -1 < nu < 0.5):
+            raise ValueError(f"need E > 0 and -1 < nu < 0.5, got E={E}, nu={nu}")
+        self.E, self.nu, self.alpha, self.T0 = float(E), float(nu), float(alpha), float(T0)
+        self.lam, self.mu = forms.lame_parameters(self.E, self.nu)
+        self.element, self.solver = element, solver
+        self.rtol, self.maxiter = rtol, maxiter
+        self.dim = mesh.p.shape[0]
+        self.n_factorizations = 0
+        self.n_solves = 0
+        self.cg_iterations: list[int] = []
+
+        escal = _ELEMENTS[(type(mesh), element)]()
+        self.basis = Basis(mesh, ElementVector(escal, dim=self.dim))
+        self.sbasis = self.basis.with_element(escal)  # scalar, same order
+        self.vbasis = self.basis.with_element(_ELEMENTS[(type(mesh), "P1")]())  # vertices
+        self.component_dofs = self.basis.split_indices()
+        self._facet_bases: dict[str, FacetBasis] = {}
+
+        # --- boundary conditions --------------------------------------------------
+        clamps = [clamps] if isinstance(clamps, str) else list(clamps)
+        rollers = dict(rollers or {})
+        D = [self._group_dofs(g) for g in clamps]
+        for g, comps in rollers.items():
+            d = self._group_dofs(g)
+            for c in _component_indices(comps, self.dim):
+                D.append(np.intersect1d(d, self.component_dofs[c]))
+        if pin_rigid is None:
+            pin_rigid = not clamps and not rollers
+        if pin_rigid:
+            D.append(self._rigid_pins())
+        self.D = np.unique(np.concatenate(D)).astype(np.int64) if D else np.zeros(0, np.int64)
+        self.I = np.setdiff1d(np.arange(self.basis.N), self.D)
+        self.clamps, self.rollers, self.pin_rigid = clamps, rollers, bool(pin_rigid)
+
+        # --- stiffness, once ------------------------------------------------------
+        t1 = time.perf_counter()
+        K = forms.linear_elasticity(self.lam, self.mu)
+        if nthreads:
+            K = type(K)(K.form, nthreads=nthreads)
+        self.K = K.assemble(self.basis).tocsr()
+        self.timings["assemble_K"] = time.perf_counter() - t1
+        t2 = time.perf_counter()
+        self._factorize()
+        self.timings["factorize"] = time.perf_counter() - t2
+        self._u_prev = None
+        self._mass = None
+        logger.info("FEMSubstrate: %s %s, %d dofs (%d free), %s; assembly %.2f s, "
+                    "factorisation %.2f s", type(mesh).__name__, element, self.basis.N,
+                    len(self.I), solver, self.timings["assemble_K"], self.timings["factorize"])
+
+    # ------------------------------------------------------------------ set-up
+    @property
+    def n_dofs(self) -> int:
+        return self.basis.N
+
+    def _group_dofs(self, group: str) -> np.ndarray:
+        names = sorted(self.mesh.boundaries or {})
+        if group not in names:
+            raise ValueError(f"mesh has no boundary group {group!r}; available: "
+                             f"{', '.join(names) if names else '(none)'}")
+        return np.asarray(self.basis.get_dofs(group).flatten(), dtype=np.int64)
+
+    def _rigid_pins(self) -> np.ndarray:
+        """3-2-1 (2D: 2-1) statically determinate pins at three well separated vertices."""
+        p = self.mesh.p
+        nd = self.basis.nodal_dofs  # (dim, nvertices)
+        a = int(np.argmin(p.sum(axis=0)))
+        b = int(np.argmax(np.linalg.norm(p - p[:, [a]], axis=0)))
+        ab = p[:, b] - p[:, a]
+        # A: all components; B: every component except the one along AB
+        pins = list(nd[:, a])
+        along = int(np.argmax(np.abs(ab)))
+        pins += [nd[c, b] for c in range(self.dim) if c != along]
+        if self.dim == 3:
+            r = p - p[:, [a]]
+            dist = np.linalg.norm(np.cross(r.T, ab), axis=1)
+            c = int(np.argmax(dist))
+            vel = np.cross(ab, p[:, c] - p[:, a])  # rotation about AB moves C along this
+            pins.append(nd[int(np.argmax(np.abs(vel))), c])
+        return np.asarray(pins, dtype=np.int64)
+
+    def _factorize(self) -> None:
+        A = self.K[self.I][:, self.I]
+        if self.solver == "direct":
+            # K_II is symmetric positive definite: a symmetric ordering and no pivoting
+            # (SuperLU's "symmetric mode") fills in far less than the default COLAMD.
+            self._lu = splu(A.tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                            options={"SymmetricMode": True})
+            self.factor_nnz = int(self._lu.L.nnz + self._lu.U.nnz)
+        else:
+            pyamg = _import_pyamg()
+            x = self.basis.doflocs[:, self.I]
+            comp = np.empty(self.basis.N, dtype=np.int64)
+            for c, idx in enumerate(self.component_dofs):
+                comp[idx] = c
+            B = rigid_body_modes(x, comp[self.I])
+            self._A = A.tocsr()
+            self._ml = pyamg.smoothed_aggregation_solver(self._A, B=B, symmetry="hermitian",
+                                                         max_coarse=500)
+            self._M = self._ml.aspreconditioner(cycle="V")
+        self.n_factorizations += 1
+
+    # ------------------------------------------------------------------ loads
+    def _dT_qp(self, spec) -> np.ndarray | float:
+        """Temperature change at the quadrature points of ``basis``."""
+        if spec is None:
+            return 0.0
+        if callable(spec):
+            return np.asarray(spec(self.basis.global_coordinates().value), float)
+        a = np.asarray(spec, float)
+        if a.ndim == 0:
+            return float(a)
+        if a.shape == (self.mesh.nvertices,):
+            return self.vbasis.interpolate(a).value
+        if a.shape == (self.sbasis.N,):
+            return self.sbasis.interpolate(a).value
+        raise ValueError(f"dT: expected a scalar, a callable, or an array of length "
+                         f"{self.mesh.nvertices} (vertices) or {self.sbasis.N} (scalar "
+                         f"{self.element} dofs); got shape {a.shape}")
+
+    def _dT_at(self, spec, X: np.ndarray) -> np.ndarray:
+        """Temperature change at points X (dim, n)."""
+        n = X.shape[1]
+        if spec is None:
+            return np.zeros(n)
+        if callable(spec):
+            return np.broadcast_to(np.asarray(spec(X), float), (n,)).copy()
+        a = np.asarray(spec, float)
+        if a.ndim == 0:
+            return np.full(n, float(a))
+        if X is self.mesh.p and a.shape == (self.mesh.nvertices,):
+            return a.copy()
+        b = self.vbasis if a.shape == (self.mesh.nvertices,) else self.sbasis
+        cells, pts = self._locate(X)
+        out = np.zeros(n)
+        for k in range(b.Nbfun):
+            out += b.elem.gbasis(b.mapping, pts, k, tind=cells)[0].value[..., 0] * \
+                a[b.element_dofs[k, cells]]
+        return out
+
+    def thermal_load(self, dT) -> np.ndarray:
+        """Load vector of the thermal strain for the temperature change ``dT``."""
+        return forms.thermal_load(self.lam, self.mu, self.alpha).assemble(
+            self.basis, dT=self._dT_qp(dT))
+
+    def facet_basis(self, group: str) -> FacetBasis:
+        if group not in self._facet_bases:
+            self._group_dofs(group)  # validates the name
+            self._facet_bases[group] = FacetBasis(self.mesh, self.basis.elem,
+                                                  facets=self.mesh.boundaries[group])
+        return self._facet_bases[group]
+
+    def traction_load(self, tractions: dict) -> np.ndarray:
+        """``{group: t}`` with t a constant vector or a callable ``t(x) -> (dim, ...)``
+        [Pa], integrated over the facets of the group."""
+        f = self.basis.zeros()
+        for g, t in tractions.items():
+            f += forms.traction_load(t).assemble(self.facet_basis(g))
+        return f
+
+    def body_force_load(self, force) -> np.ndarray:
+        return forms.body_force_load(force).assemble(self.basis)
+
+    def snap_to_surface(self, points, group: str = "top") -> np.ndarray:
+        """Move points (n, dim) onto the nearest facet of ``group`` (projection on the facet
+        plane, clipped into the facet), then a hair (1e-9 of the facet size) inside the
+        element, so that point location accepts them."""
+        from scipy.spatial import cKDTree
+
+        P = np.atleast_2d(np.asarray(points, float))
+        m = self.mesh
+        facets = m.boundaries[group] if group in (m.boundaries or {}) else None
+        if facets is None:
+            self._group_dofs(group)  # raises the naming error
+        fv = m.facets[:, facets]  # (nverts_per_facet, nf)
+        cen = m.p[:, fv].mean(axis=1)  # (dim, nf)
+        tree = cKDTree(cen.T)
+        _, j = tree.query(P)
+        out = np.empty_like(P)
+        for i, (x, f) in enumerate(zip(P, j, strict=True)):
+            V = m.p[:, fv[:, f]].T  # (k, dim)
+            out[i] = _closest_on_facet(x, V)
+        # nudge inside along the inward normal of the facet's element
+        t = m.f2t[0, facets[j]]
+        ec = m.p[:, m.t[:, t]].mean(axis=1).T
+        d = ec - out
+        size = np.linalg.norm(m.p[:, fv[0, j]] - m.p[:, fv[1, j]], axis=0)
+        out += 1e-9 * size[:, None] * d / np.linalg.norm(d, axis=1)[:, None]
+        return out
+
+    def point_force_load(self, points, forces, snap: str | None = "top") -> np.ndarray:
+        """Consistent nodal loads of point forces (n, dim) at ``points`` (n, dim): f = P^T F
+        with P the probe (interpolation) matrix, so sum_nodes f_c = sum_points F_c exactly."""
+        X = np.atleast_2d(np.asarray(points, float))
+        F = np.atleast_2d(np.asarray(forces, float))
+        if X.shape != F.shape or X.shape[1] != self.dim:
+            raise ValueError(f"point forces: points {X.shape} and forces {F.shape} must both "
+                             f"be (n, {self.dim})")
+        if snap:
+            X = self.snap_to_surface(X, snap)
+        P = self.probe_matrix(X)
+        return P.T @ F.T.ravel()
+
+    def probe_matrix(self, points) -> sp.csr_matrix:
+        """Interpolation matrix P (dim*n, ndofs), rows ordered [x-comps, y-comps, ...]."""
+        X = np.atleast_2d(np.asarray(points, float)).T
+        cells, pts = self._locate(X)
+        b = self.basis
+        n = X.shape[1]
+        rows, cols, vals = [], [], []
+        for k in range(b.Nbfun):
+            v = b.elem.gbasis(b.mapping, pts, k, tind=cells)[0].value[..., 0]  # (dim, n)
+            for c in range(self.dim):
+                nz = v[c] != 0
+                rows.append(c * n + np.nonzero(nz)[0])
+                cols.append(b.element_dofs[k, cells][nz])
+                vals.append(v[c][nz])
+        return sp.coo_matrix((np.concatenate(vals), (np.concatenate(rows),
+                                                     np.concatenate(cols))),
+                             shape=(self.dim * n, b.N)).tocsr()
+
+    def _locate(self, X: np.ndarray):
+        """Element and reference coordinates of points X (dim, n)."""
+        try:
+            cells = self.mesh.element_finder(mapping=self.basis.mapping)(*X)
+        except ValueError:
+            lo, hi = self.mesh.p.min(axis=1), self.mesh.p.max(axis=1)
+            raise ValueError(f"probe: some of the {X.shape[1]} points are outside the mesh "
+                             f"(bounding box {lo} .. {hi}); snap surface points first") from None
+        pts = self.basis.mapping.invF(X[:, :, np.newaxis], tind=cells)
+        return cells, pts
+
+    # ------------------------------------------------------------------ solve
+    def solve(self, dT_nodal=None, tractions=None, point_forces=None, body_force=None,
+              T_nodal=None, snap: str | None = "top") -> FEMResult:
+        """Solve K u = f for this step's loads (K is not refactorised).
+
+        dT_nodal : temperature change: scalar, vertex array, scalar-dof array or callable.
+        T_nodal : absolute temperature instead (dT = T - T0).
+        tractions : ``{group: t}``, t constant (dim,) or callable of x [Pa].
+        point_forces : ``(points, forces)``, each (n, dim) [m, N]; points are snapped onto
+            the facet group ``snap`` (None: used as given).
+        body_force : constant (dim,) or callable of x [N/m^3].
+        """
+        t0 = time.perf_counter()
+        if T_nodal is not None:
+            if dT_nodal is not None:
+                raise ValueError("give dT_nodal or T_nodal, not both")
+            T = T_nodal
+            dT_nodal = (lambda x: np.asarray(T(x)) - self.T0) if callable(T) else \
+                np.asarray(T, float) - self.T0
+        f = self.basis.zeros()
+        if dT_nodal is not None:
+            f += self.thermal_load(dT_nodal)
+        if tractions:
+            f += self.traction_load(tractions)
+        if point_forces is not None:
+            f += self.point_force_load(*point_forces, snap=snap)
+        if body_force is not None:
+            f += self.body_force_load(body_force)
+        t1 = time.perf_counter()
+        u = self.basis.zeros()
+        info = {"assemble_load_s": t1 - t0}
+        if self.solver == "direct":
+            u[self.I] = self._lu.solve(f[self.I])
+        else:
+            from scipy.sparse.linalg import cg
+
+            b = f[self.I]
+            x0 = self._u_prev[self.I] if self._u_prev is not None else None
+            its = [0]
+
+            def count(_):
+                its[0] += 1
+
+            x, flag = cg(self._A, b, x0=x0, rtol=self.rtol, atol=0.0, maxiter=self.maxiter,
+                         M=self._M, callback=count)
+            if flag != 0:
+                raise RuntimeError(f"CG did not converge in {self.maxiter} iterations "
+                                   f"(rtol {self.rtol})")
+            u[self.I] = x
+            info["cg_iterations"] = its[0]
+            self.cg_iterations.append(its[0])
+        info["solve_s"] = time.perf_counter() - t1
+        self._u_prev = u
+        self.n_solves += 1
+        return FEMResult(self, u, f, dT_nodal, info)
+
+    # ------------------------------------------------------------------ projection
+    def project_tensor(self, Sq: np.ndarray) -> np.ndarray:
+        """L2 projection of a (3, 3, nelems, nqp) quadrature field onto P1 vertex values,
+        (nvertices, 3, 3); conjugate gradients on the (well conditioned) mass matrix."""
+        from scipy.sparse.linalg import cg
+
+        vb = self.vbasis
+        if self._mass is None:
+            self._mass = forms.mass.assemble(vb).tocsr()
+            self._mass_diag = self._mass.diagonal()
+
+        @LinearForm
+        def rhs(v, w):
+            return w.s * v
+
+        out = np.zeros((vb.N, 3, 3))
+        Minv = sp.diags(1.0 / self._mass_diag)
+        for i in range(3):
+            for j in range(i, 3):
+                b = rhs.assemble(vb, s=Sq[i, j])
+                x0 = b / self._mass_diag
+                x, _ = cg(self._mass, b, x0=x0, rtol=1e-12, atol=0.0, M=Minv, maxiter=500)
+                out[:, i, j] = out[:, j, i] = x
+        return out
+
+
+def _closest_on_facet(x: np.ndarray, V: np.ndarray) -> np.ndarray:
+    """Closest point to x on a simplex facet with vertices V (k, dim); a quadrilateral
+    facet (hex mesh) is treated as planar and axis-aligned (the recipes' box faces):
+    projection on its plane, clipped to its bounding box."""
+    if len(V) == 4 and V.shape[1] == 3:
+        v0 = V[0]
+        A = (V[1:3] - v0).T
+        lam, *_ = np.linalg.lstsq(A, x - v0, rcond=None)
+        return np.clip(v0 + A @ lam, V.min(axis=0), V.max(axis=0))
+    return _closest_on_simplex(x, V)
+
+
+def _closest_on_simplex(x, V):
+    v0 = V[0]
+    A = (V[1:] - v0).T  # (dim, k-1)
+    lam, *_ = np.linalg.lstsq(A, x - v0, rcond=None)
+    bary = np.concatenate([[1 - lam.sum()], lam])
+    if (bary >= 0).all():
+        return v0 + A @ lam
+    # outside: clip to the best edge/vertex (small facets: brute force over sub-simplices)
+    best, bd = None, np.inf
+    k = len(V)
+    for i in range(k):
+        for j in range(i + 1, k):
+            e = V[j] - V[i]
+            s = np.clip(np.dot(x - V[i], e) / np.dot(e, e), 0.0, 1.0)
+            q = V[i] + s * e
+            d = np.linalg.norm(q - x)
+            if d < bd:
+                best, bd = q, d
+    return best
+
+
+def _import_pyamg():
+    try:
+        import pyamg
+    except ImportError as e:  # pragma: no cover - depends on the environment
+        raise ImportError("solver='cg-amg' needs pyamg (pip install pyamg); "
+                          "or use solver='direct'") from e
+    return pyamg
