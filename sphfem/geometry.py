@@ -1,0 +1,361 @@
+"""Particle blocks: shapes, lattice and Poisson-disk placement, and :func:`build_particles`.
+
+Shapes (``box``, ``sphere``, ``cylinder``) in 1D, 2D and 3D:
+
+* 1D: a box and a sphere are segments (``[c - r, c + r]``); a cylinder is the segment of
+  ``length`` along x centred at ``center`` (its radius is not used).
+* 2D: a sphere is a disc; a cylinder is its axial section, the rectangle ``length`` along
+  ``axis`` by ``2 radius`` across, centred at ``center``.
+* 3D: a cylinder is circular, axis along ``axis``, centred (mid-length) at ``center``.
+
+Placement:
+
+* :func:`lattice_points` -- Cartesian lattice.  Cell-centred by default: a box ``[0, 1]``
+  with ``dx = 0.1`` gets 10 particles per axis at 0.05, 0.15, ..., 0.95; the spacing of a
+  box (and of a cylinder along its axis) is adjusted per axis to ``L / round(L / dx)`` so
+  the box is tiled exactly by particle cells.  ``include_boundary=True`` gives the
+  node-aligned lattice ``round(L / dx) + 1`` points per axis from ``lo`` to ``hi``
+  inclusive (11 at 0, 0.1, ..., 1.0), as the Laplacian patch test needs.  Spheres and
+  discs take the points of a lattice centred on ``center`` (cell-centred: ``c + (i + 1/2)
+  dx``; node-aligned: ``c + i dx``) that lie inside the shape.
+* :func:`poisson_points` -- blue noise for free-surface bodies: scipy's Poisson-disk
+  sampler (``scipy.stats.qmc.PoissonDisk``) on the bounding box, clipped to the shape.  The
+  disk radius starts from a calibrated fraction of ``dx`` and is corrected until the count
+  is within a few per cent of ``volume / dx^dim``; a few repulsion sweeps then even out
+  the spacing.  Deterministic for a given seed.  (The sampler is pure Python: ~1 s per
+  2000 points in 2D, ~1 s per 1500 points in 3D.)
+
+:func:`build_particles` fills every block of a scene: mass ``rho0 * V / n`` (so a block
+carries its exact mass), ``rho = rho0``, ``vol = m / rho``, ``kind``, ``material`` (the
+position of the material in ``scene.materials``), and the fields ``v`` (n, dim) and ``T``
+(n,) from the block's velocity and temperature.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from sphfem.particles import KIND_NAMES, ParticleSet
+from sphfem.schema import SceneError
+
+AXES = "xyz"
+
+#: disk radius / dx for which a maximal Poisson-disk sample has mean density 1/dx^dim
+POISSON_RADIUS_FACTOR = {1: 0.687, 2: 0.778, 3: 0.835}
+
+
+@dataclass(frozen=True)
+class Shape:
+    """A block geometry.  Build with :meth:`box`, :meth:`sphere`, :meth:`cylinder`."""
+
+    kind: str
+    dim: int
+    lo: tuple = ()
+    hi: tuple = ()
+    center: tuple = ()
+    radius: float = 0.0
+    length: float = 0.0
+    axis: int = 0
+
+    @classmethod
+    def box(cls, lo, hi) -> Shape:
+        lo, hi = _vec(lo), _vec(hi)
+        if len(lo) != len(hi) or not 1 <= len(lo) <= 3:
+            raise ValueError("box lo and hi must be vectors of the same length 1, 2 or 3")
+        if any(h <= l for l, h in zip(lo, hi, strict=True)):
+            raise ValueError("box hi must exceed lo on every axis")
+        return cls("box", len(lo), lo=lo, hi=hi)
+
+    @classmethod
+    def sphere(cls, center, radius) -> Shape:
+        c = _vec(center)
+        if not radius > 0:
+            raise ValueError("sphere radius must be positive")
+        return cls("sphere", len(c), center=c, radius=float(radius))
+
+    @classmethod
+    def cylinder(cls, center, radius, length, axis="z") -> Shape:
+        c = _vec(center)
+        a = AXES.index(axis) if isinstance(axis, str) else int(axis)
+        if a >= len(c):
+            raise ValueError(f"cylinder axis {axis!r} does not exist in {len(c)}D")
+        if not (radius > 0 and length > 0):
+            raise ValueError("cylinder radius and length must be positive")
+        return cls("cylinder", len(c), center=c, radius=float(radius), length=float(length),
+                   axis=a)
+
+    @classmethod
+    def from_block(cls, block, dim: int | None = None) -> Shape:
+        """The shape of a scene block record (``scene.blocks[i]``)."""
+        if block.shape == "box":
+            s = cls.box(block.lo, block.hi)
+        elif block.shape == "sphere":
+            s = cls.sphere(block.center, block.radius)
+        elif block.shape == "cylinder":
+            s = cls.cylinder(block.center, block.radius, block.length, block.axis)
+        else:
+            raise ValueError(f"unknown shape {block.shape!r}")
+        if dim is not None and s.dim != dim:
+            raise ValueError(f"block geometry is {s.dim}D in a {dim}D scene")
+        return s
+
+    def as_box(self) -> Shape | None:
+        """The equivalent box of a segment (1D) or a 2D cylinder, else None."""
+        if self.kind == "box":
+            return self
+        c = np.array(self.center)
+        if self.kind == "sphere" and self.dim == 1:
+            return Shape.box(c - self.radius, c + self.radius)
+        if self.kind == "cylinder" and self.dim <= 2:
+            half = np.full(self.dim, self.radius)
+            half[self.axis] = 0.5 * self.length
+            return Shape.box(c - half, c + half)
+        return None
+
+    def volume(self) -> float:
+        """Exact measure: length (1D), area (2D) or volume (3D) [m^dim]."""
+        b = self.as_box()
+        if b is not None:
+            return float(np.prod(np.subtract(b.hi, b.lo)))
+        r = self.radius
+        if self.kind == "sphere":
+            return math.pi * r * r if self.dim == 2 else 4.0 / 3.0 * math.pi * r**3
+        return math.pi * r * r * self.length  # 3D cylinder
+
+    def bounds(self) -> tuple[tuple, tuple]:
+        """Axis-aligned bounding box (lo, hi)."""
+        b = self.as_box()
+        if b is not None:
+            return b.lo, b.hi
+        c = np.array(self.center)
+        half = np.full(self.dim, self.radius)
+        if self.kind == "cylinder":
+            half[self.axis] = 0.5 * self.length
+        return _vec(c - half), _vec(c + half)
+
+    def contains(self, x, tol: float = 0.0) -> np.ndarray:
+        """Mask of the points ``x`` (n, dim) inside the shape (grown by ``tol``)."""
+        x = np.asarray(x, dtype=np.float64).reshape(-1, self.dim)
+        b = self.as_box()
+        if b is not None:
+            return np.all((x >= np.array(b.lo) - tol) & (x <= np.array(b.hi) + tol), axis=1)
+        d = x - np.array(self.center)
+        if self.kind == "sphere":
+            return np.einsum("ij,ij->i", d, d) <= (self.radius + tol) ** 2
+        across = np.delete(d, self.axis, axis=1)
+        return (np.einsum("ij,ij->i", across, across) <= (self.radius + tol) ** 2) & (
+            np.abs(d[:, self.axis]) <= 0.5 * self.length + tol
+        )
+
+
+def _vec(v) -> tuple:
+    return tuple(float(x) for x in np.atleast_1d(np.asarray(v, dtype=np.float64)))
+
+
+def _check(shape: Shape, dx: float, dim: int | None) -> None:
+    if dim is not None and dim != shape.dim:
+        raise ValueError(f"shape is {shape.dim}D, asked for {dim}D points")
+    if not (dx > 0 and math.isfinite(dx)):
+        raise ValueError(f"spacing dx must be positive, got {dx}")
+
+
+# --------------------------------------------------------------------------------------
+# lattice
+
+
+def _axis_points(lo: float, hi: float, dx: float, include_boundary: bool) -> np.ndarray:
+    n = max(1, int(round((hi - lo) / dx)))
+    if include_boundary:
+        return np.linspace(lo, hi, n + 1)
+    h = (hi - lo) / n
+    return lo + (np.arange(n) + 0.5) * h
+
+
+def _grid(axes: list[np.ndarray]) -> np.ndarray:
+    mesh = np.meshgrid(*axes, indexing="ij")
+    return np.stack([m.reshape(-1) for m in mesh], axis=1)
+
+
+def _ball_offsets(r: float, dx: float, dim: int, include_boundary: bool) -> np.ndarray:
+    k = int(math.ceil(r / dx)) + 1
+    if include_boundary:
+        line = np.arange(-k, k + 1) * dx
+        keep_r2 = (r * (1.0 + 1e-12)) ** 2
+    else:
+        line = (np.arange(-k, k) + 0.5) * dx
+        keep_r2 = r * r
+    p = _grid([line] * dim)
+    p = p[np.einsum("ij,ij->i", p, p) <= keep_r2] if include_boundary else p[
+        np.einsum("ij,ij->i", p, p) < keep_r2]
+    return p
+
+
+def lattice_points(shape: Shape, dx: float, dim: int | None = None, *,
+                   include_boundary: bool = False) -> np.ndarray:
+    """Cartesian lattice positions (n, dim) filling ``shape`` (see the module docstring)."""
+    _check(shape, dx, dim)
+    b = shape.as_box()
+    if b is not None:
+        axes = [_axis_points(lo, hi, dx, include_boundary)
+                for lo, hi in zip(b.lo, b.hi, strict=True)]
+        return np.ascontiguousarray(_grid(axes))
+    c = np.array(shape.center)
+    if shape.kind == "sphere":
+        return np.ascontiguousarray(c + _ball_offsets(shape.radius, dx, shape.dim,
+                                                      include_boundary))
+    # 3D cylinder: disc lattice across times a line along the axis
+    disc = _ball_offsets(shape.radius, dx, 2, include_boundary)
+    half = 0.5 * shape.length
+    line = _axis_points(-half, half, dx, include_boundary)
+    x = np.empty((disc.shape[0] * line.shape[0], 3))
+    across = [a for a in range(3) if a != shape.axis]
+    x[:, shape.axis] = np.repeat(line, disc.shape[0])
+    x[:, across] = np.tile(disc, (line.shape[0], 1))
+    return np.ascontiguousarray(x + c)
+
+
+# --------------------------------------------------------------------------------------
+# Poisson disk (blue noise)
+
+
+def _poisson_box(lo, hi, radius: float, rng) -> np.ndarray:
+    from scipy.stats import qmc
+
+    d = len(lo)
+    try:
+        engine = qmc.PoissonDisk(d, radius=radius, rng=rng, l_bounds=lo, u_bounds=hi)
+    except TypeError:  # scipy < 1.15 names the generator `seed`
+        engine = qmc.PoissonDisk(d, radius=radius, seed=rng, l_bounds=lo, u_bounds=hi)
+    return engine.fill_space()
+
+
+def poisson_points(shape: Shape, dx: float, dim: int | None = None, seed=0, *,
+                   relax: int = 3, tolerance: float = 0.03) -> np.ndarray:
+    """Poisson-disk positions (n, dim) in ``shape`` with mean spacing ``dx``.
+
+    The count matches ``volume / dx^dim`` within ``tolerance`` (or ``1/sqrt(target)`` for
+    very small blocks, where the count is noisy), the minimum distance is about
+    ``0.7-0.8 dx`` and ``relax`` repulsion sweeps even the spacing out.  ``seed`` is an int
+    or a sequence of ints (``numpy.random.default_rng`` semantics).
+    """
+    _check(shape, dx, dim)
+    d = shape.dim
+    target = shape.volume() / dx**d
+    lo, hi = shape.bounds()
+    tol = max(tolerance, 1.0 / math.sqrt(max(target, 1.0)))
+    radius = POISSON_RADIUS_FACTOR[d] * dx
+    best = None
+    for _ in range(4):
+        rng = np.random.default_rng(seed)
+        x = _poisson_box(lo, hi, radius, rng)
+        x = x[shape.contains(x)]
+        ratio = x.shape[0] / target
+        if best is None or abs(ratio - 1.0) < abs(best[1] - 1.0):
+            best = (x, ratio, radius)
+        if abs(ratio - 1.0) <= tol or x.shape[0] == 0:
+            break
+        radius *= ratio ** (1.0 / d)
+    x, _, radius = best
+    if relax and x.shape[0] > 1:
+        x = _relax(x, shape, dx, relax)
+    return np.ascontiguousarray(x)
+
+
+def _relax(x: np.ndarray, shape: Shape, dx: float, iterations: int) -> np.ndarray:
+    """Repulsion sweeps between points closer than dx; moves leaving the shape are undone."""
+    x = x.copy()
+    for _ in range(iterations):
+        pairs = cKDTree(x).query_pairs(dx, output_type="ndarray")
+        if pairs.shape[0] == 0:
+            break
+        i, j = pairs[:, 0], pairs[:, 1]
+        d = x[i] - x[j]
+        r = np.sqrt(np.einsum("ij,ij->i", d, d))
+        w = ((1.0 - r / dx) ** 2 / np.maximum(r, 1e-12 * dx))[:, None] * d
+        disp = np.zeros_like(x)
+        np.add.at(disp, i, w)
+        np.add.at(disp, j, -w)
+        disp *= 0.1 * dx
+        step = np.sqrt(np.einsum("ij,ij->i", disp, disp))
+        cap = 0.1 * dx
+        disp *= np.minimum(1.0, cap / np.maximum(step, 1e-300))[:, None]
+        moved = x + disp
+        ok = shape.contains(moved)
+        x[ok] = moved[ok]
+    return x
+
+
+# --------------------------------------------------------------------------------------
+# scene blocks -> particles
+
+
+def block_points(scene, i: int) -> np.ndarray:
+    """Positions of block ``i`` of ``scene`` (its own ``dx`` or ``[sph] dx``)."""
+    b = scene.blocks[i]
+    dx = b.dx if b.dx is not None else scene.sph.dx
+    shape = Shape.from_block(b, scene.dim)
+    if b.sampling == "poisson":
+        return poisson_points(shape, dx, scene.dim, seed=[scene.seed, i])
+    return lattice_points(shape, dx, scene.dim)
+
+
+def build_particles(scene) -> ParticleSet:
+    """All blocks of ``scene`` as one :class:`ParticleSet` (block order, then lattice order).
+
+    Raises :class:`SceneError` naming the block if a block gets no particles or if particles
+    of two blocks are closer than half the (smaller) spacing.
+    """
+    dim = scene.dim
+    pts, spacing, boxes = [], [], []
+    for i, b in enumerate(scene.blocks):
+        x = block_points(scene, i)
+        dx = b.dx if b.dx is not None else scene.sph.dx
+        if x.shape[0] == 0:
+            raise SceneError(scene.source, f"blocks[{i}]",
+                             f"block {b.name!r} gets no particles: it is smaller than its "
+                             f"spacing dx = {dx:g} m")
+        pts.append(x)
+        spacing.append(dx)
+        boxes.append((x.min(axis=0), x.max(axis=0)))
+    _check_overlaps(scene, pts, spacing, boxes)
+
+    out = None
+    for i, b in enumerate(scene.blocks):
+        x = pts[i]
+        n = x.shape[0]
+        rho0 = scene.materials[b.material].rho0
+        m = rho0 * Shape.from_block(b, dim).volume() / n
+        ps = ParticleSet.from_arrays(x, m=m, rho=rho0, kind=KIND_NAMES[b.kind],
+                                     material=scene.material_index(b.material))
+        v = ps.add_field("v", dim)
+        v[:] = np.asarray(b.velocity, dtype=np.float64)
+        ps.add_field("T", 1, fill=float(b.temperature))
+        if out is None:
+            out = ps
+        else:
+            out.append(ps)
+    return out
+
+
+def _check_overlaps(scene, pts, spacing, boxes) -> None:
+    trees = {}
+    for j in range(len(pts)):
+        for i in range(j):
+            tol = 0.5 * min(spacing[i], spacing[j])
+            (lo_i, hi_i), (lo_j, hi_j) = boxes[i], boxes[j]
+            if np.any(lo_j > hi_i + tol) or np.any(lo_i > hi_j + tol):
+                continue
+            if i not in trees:
+                trees[i] = cKDTree(pts[i])
+            dist, _ = trees[i].query(pts[j], k=1, distance_upper_bound=tol)
+            close = int(np.count_nonzero(dist < tol))
+            if close:
+                bi, bj = scene.blocks[i], scene.blocks[j]
+                raise SceneError(
+                    scene.source, f"blocks[{j}]",
+                    f"block {bj.name!r} overlaps block {bi.name!r} (blocks[{i}]): {close} "
+                    f"particle(s) closer than dx/2 = {tol:g} m; move or shrink one of them")
