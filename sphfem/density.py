@@ -33,9 +33,10 @@ def summation_density(x, m, offsets, indices, R, sigma, kind, period):
         xi0 = x[i, 0]
         xi1 = x[i, 1] if dim > 1 else 0.0
         xi2 = x[i, 2] if dim > 2 else 0.0
-        acc = m[i] * w0
-        for q in range(offsets[i], offsets[i + 1]):
-            j = indices[q]
+        acc = 0.0
+        # unsigned indices: no negative-index wraparound code, so the loop vectorises
+        for q in range(np.uint64(offsets[i]), np.uint64(offsets[i + 1])):
+            j = np.uint64(indices[q])
             d = min_image(xi0 - x[j, 0], L0)
             r2 = d * d
             if dim > 1:
@@ -45,7 +46,7 @@ def summation_density(x, m, offsets, indices, R, sigma, kind, period):
                 d = min_image(xi2 - x[j, 2], L2)
                 r2 += d * d
             acc += m[j] * kernel_f(np.sqrt(r2) * inv_R, kind)
-        rho[i] = sigma * acc
+        rho[i] = sigma * (m[i] * w0 + acc)
     return rho
 
 

@@ -233,115 +233,164 @@ def _image(a, nc, L):
     return a, 0.0
 
 
+# The passes work cell by cell: the candidates of a cell (its stencil cells, pruned to those
+# within the radius of the cell's particle bounding box) are gathered once into contiguous
+# scratch arrays, then every particle of the cell scans them with a branch-free loop.
 # Hot loops index with unsigned integers: numba then skips its negative-index wraparound
 # code, which otherwise blocks vectorisation (4-7x slower candidate loops).
+# Strict IEEE maths here (no fastmath): counting and filling must agree bit for bit on
+# r^2 <= R^2, whatever the vectorisation of the count loop.
 
 
 @njit(cache=True, inline="always")
-def _count_run(x0, x1, x2, ps, pe, y0, y1, y2, r2max):
-    k = 0
-    for p in range(np.uint64(ps), np.uint64(pe)):
-        d0 = y0 - x0[p]
-        d1 = y1 - x1[p]
-        d2 = y2 - x2[p]
-        k += d0 * d0 + d1 * d1 + d2 * d2 <= r2max
-    return k
+def _cell_xyz(c, ncell):
+    c2 = c % ncell[2]
+    c01 = c // ncell[2]
+    return c01 // ncell[1], c01 % ncell[1], c2
+
+
+@njit(cache=True)
+def _max_candidates(cell_start, ncell, reach, period):
+    """Largest number of (unpruned) stencil candidates over non-empty cells."""
+    ncells = cell_start.shape[0] - 1
+    best = np.zeros(ncells, dtype=np.int64)
+    for c in range(ncells):
+        if cell_start[c + 1] == cell_start[c]:
+            continue
+        c0, c1, c2 = _cell_xyz(c, ncell)
+        a_lo, a_hi = _axis_span(c0, reach[0], ncell[0], period[0])
+        b_lo, b_hi = _axis_span(c1, reach[1], ncell[1], period[1])
+        e_lo, e_hi = _axis_span(c2, reach[2], ncell[2], period[2])
+        m = 0
+        for a in range(a_lo, a_hi + 1):
+            aa, _ = _image(a, ncell[0], period[0])
+            for b in range(b_lo, b_hi + 1):
+                bb, _ = _image(b, ncell[1], period[1])
+                row = (aa * ncell[1] + bb) * ncell[2]
+                e = e_lo
+                while e <= e_hi:
+                    ee, _ = _image(e, ncell[2], period[2])
+                    run = min(e_hi - e, ncell[2] - 1 - ee)
+                    m += cell_start[row + ee + run + 1] - cell_start[row + ee]
+                    e += run + 1
+        best[c] = m
+    return best.max() if ncells else 0
 
 
 @njit(cache=True, inline="always")
-def _fill_run(x0, x1, x2, ps, pe, y0, y1, y2, r2max, pself, order, buf, k):
-    # branch-free compaction: always store, advance only on a hit (buf has a spare slot)
-    for p in range(np.uint64(ps), np.uint64(pe)):
-        d0 = y0 - x0[p]
-        d1 = y1 - x1[p]
-        d2 = y2 - x2[p]
-        buf[np.uint64(k)] = order[p]
-        k += (d0 * d0 + d1 * d1 + d2 * d2 <= r2max) & (p != pself)
-    return k
-
-
-# The passes below use strict IEEE maths (no fastmath): counting and filling must agree bit
-# for bit on r^2 <= R^2, whatever the vectorisation of the count loop.
-
-
-@njit(cache=True, inline="always")
-def _stencil(i, xs, order, rank, cc, cell_start, ncell, reach, period, r2max, buf, fill):
-    """Hits of particle ``i`` over its cell stencil, stored in ``buf`` when ``fill``.
-
-    Counting includes ``i`` itself; filling skips it.  The image of a periodic cell is
-    reached by shifting the centre, so no minimum image is needed per candidate, and a box
-    of only one or two cells is handled by visiting each (cell, image) pair once.
-    """
-    n0, n1, n2 = ncell[0], ncell[1], ncell[2]
-    L0, L1, L2 = period[0], period[1], period[2]
+def _gather_candidates(c, xs, order, cell_start, ncell, reach, period, r2max, cx, cj):
+    """Candidates of cell ``c`` (positions with periodic image shift, ids) -> count."""
     x0 = xs[0]
     x1 = xs[1]
     x2 = xs[2]
-    pi = rank[i]
-    a_lo, a_hi = _axis_span(cc[i, 0], reach[0], n0, L0)
-    b_lo, b_hi = _axis_span(cc[i, 1], reach[1], n1, L1)
-    e_lo, e_hi = _axis_span(cc[i, 2], reach[2], n2, L2)
-    k = 0
+    p0 = cell_start[c]
+    p1 = cell_start[c + 1]
+    lo0 = hi0 = x0[p0]
+    lo1 = hi1 = x1[p0]
+    lo2 = hi2 = x2[p0]
+    for p in range(np.uint64(p0 + 1), np.uint64(p1)):
+        lo0 = min(lo0, x0[p])
+        hi0 = max(hi0, x0[p])
+        lo1 = min(lo1, x1[p])
+        hi1 = max(hi1, x1[p])
+        lo2 = min(lo2, x2[p])
+        hi2 = max(hi2, x2[p])
+    c0, c1, c2 = _cell_xyz(c, ncell)
+    a_lo, a_hi = _axis_span(c0, reach[0], ncell[0], period[0])
+    b_lo, b_hi = _axis_span(c1, reach[1], ncell[1], period[1])
+    e_lo, e_hi = _axis_span(c2, reach[2], ncell[2], period[2])
+    m = 0
     for a in range(a_lo, a_hi + 1):
-        aa, sh0 = _image(a, n0, L0)
-        y0 = x0[pi] - sh0
+        aa, sh0 = _image(a, ncell[0], period[0])
         for b in range(b_lo, b_hi + 1):
-            bb, sh1 = _image(b, n1, L1)
-            y1 = x1[pi] - sh1
-            row = (aa * n1 + bb) * n2
+            bb, sh1 = _image(b, ncell[1], period[1])
+            row = (aa * ncell[1] + bb) * ncell[2]
             e = e_lo
             while e <= e_hi:  # runs of consecutive last-axis cells with one image each
-                ee, sh2 = _image(e, n2, L2)
-                run = min(e_hi - e, n2 - 1 - ee)
-                y2 = x2[pi] - sh2
-                ps = cell_start[row + ee]
-                pe = cell_start[row + ee + run + 1]
-                if fill:
-                    k = _fill_run(x0, x1, x2, ps, pe, y0, y1, y2, r2max, pi, order, buf, k)
-                else:
-                    k += _count_run(x0, x1, x2, ps, pe, y0, y1, y2, r2max)
+                ee, sh2 = _image(e, ncell[2], period[2])
+                run = min(e_hi - e, ncell[2] - 1 - ee)
+                ps = np.uint64(cell_start[row + ee])
+                pe = np.uint64(cell_start[row + ee + run + 1])
+                for p in range(ps, pe):
+                    y0 = x0[p] + sh0
+                    y1 = x1[p] + sh1
+                    y2 = x2[p] + sh2
+                    d0 = max(lo0 - y0, 0.0, y0 - hi0)
+                    d1 = max(lo1 - y1, 0.0, y1 - hi1)
+                    d2 = max(lo2 - y2, 0.0, y2 - hi2)
+                    q = np.uint64(m)
+                    cx[0, q] = y0
+                    cx[1, q] = y1
+                    cx[2, q] = y2
+                    cj[q] = order[p]
+                    m += d0 * d0 + d1 * d1 + d2 * d2 <= r2max
                 e += run + 1
-    return k
+    return m
 
 
 @njit(cache=True, parallel=True)
-def _count_pass(xs, order, rank, cc, cell_start, ncell, reach, period, r2max):
-    """Number of neighbours of every particle (self excluded)."""
-    n = order.shape[0]
-    counts = np.empty(n, dtype=np.int64)
-    dummy = np.empty(0, dtype=np.int32)
-    for i in prange(n):
-        k = _stencil(i, xs, order, rank, cc, cell_start, ncell, reach, period, r2max, dummy, False)
-        counts[i] = k - 1
-    return counts
+def _cell_pass(xs, order, cell_start, ncell, reach, period, r2max, maxcand, offsets, out):
+    """Count (``out`` empty; returns counts, self excluded) or fill the CSR segments.
 
-
-@njit(cache=True, parallel=True)
-def _fill_pass(xs, order, rank, cc, cell_start, ncell, reach, period, r2max, offsets, out):
-    """Write every particle's sorted neighbours into ``out[offsets[i]:offsets[i+1]]``.
-
-    Particles are split into contiguous chunks with one scratch row each (the branch-free
-    compaction writes one slot past the last hit); each particle then copies its hits into
-    its own segment, so the pass is race free and independent of the thread count.
+    Each particle writes only its own segment (via a per-chunk scratch row: the branch-free
+    compaction stores one slot past the last hit), so the pass is race free, and the
+    result does not depend on the thread count.
     """
     n = order.shape[0]
-    width = 1
-    for i in range(n):
-        width = max(width, offsets[i + 1] - offsets[i] + 1)
-    nchunk = max(1, min(n, 256, (1 << 24) // width))
-    scratch = np.empty((nchunk, width), dtype=np.int32)
+    fill = out.shape[0] > 0
+    ncells = cell_start.shape[0] - 1
+    counts = np.zeros(n, dtype=np.int64)
+    nchunk = max(1, min(ncells, 1024))
     for t in prange(nchunk):
-        buf = scratch[t]
-        for i in range(t * n // nchunk, (t + 1) * n // nchunk):
-            k = _stencil(i, xs, order, rank, cc, cell_start, ncell, reach, period, r2max, buf, True)
-            base = offsets[i]
-            ordered = True
-            for q in range(k):
-                out[base + q] = buf[q]
-                if q > 0 and buf[q] < buf[q - 1]:
-                    ordered = False
-            if not ordered:  # only when particles are not cell-sorted, or across a period
-                out[base : base + k].sort()
+        cx = np.empty((3, maxcand + 1))
+        cj = np.empty(maxcand + 8, dtype=np.int32)
+        buf = np.empty(maxcand + 8 if fill else 0, dtype=np.int32)
+        hit = np.zeros(maxcand + 8 if fill else 8, dtype=np.uint8)
+        hit8 = hit[: 8 * (hit.shape[0] // 8)].view(np.uint64)
+        cx0 = cx[0]
+        cx1 = cx[1]
+        cx2 = cx[2]
+        for c in range(t * ncells // nchunk, (t + 1) * ncells // nchunk):
+            if cell_start[c + 1] == cell_start[c]:
+                continue
+            m = _gather_candidates(c, xs, order, cell_start, ncell, reach, period, r2max, cx, cj)
+            if fill:
+                hit[m : m + 8] = 0  # padding of the last 8-candidate word
+            for p in range(cell_start[c], cell_start[c + 1]):
+                i = order[p]
+                xi0 = xs[0, p]
+                xi1 = xs[1, p]
+                xi2 = xs[2, p]
+                k = 0
+                if fill:
+                    # vectorised hit mask, then a compaction that skips 8 misses at a time
+                    for q in range(np.uint64(m)):
+                        d0 = xi0 - cx0[q]
+                        d1 = xi1 - cx1[q]
+                        d2 = xi2 - cx2[q]
+                        hit[q] = (d0 * d0 + d1 * d1 + d2 * d2 <= r2max) & (cj[q] != i)
+                    for w in range(np.uint64((m + 7) // 8)):
+                        if hit8[w] != 0:
+                            for q in range(8 * w, 8 * w + 8):
+                                buf[np.uint64(k)] = cj[q]
+                                k += hit[q]
+                    base = offsets[i]
+                    ordered = True
+                    for q in range(k):
+                        out[base + q] = buf[q]
+                        if q > 0 and buf[q] < buf[q - 1]:
+                            ordered = False
+                    if not ordered:  # particles not cell-sorted, or stencil across a period
+                        out[base : base + k].sort()
+                else:
+                    for q in range(np.uint64(m)):
+                        d0 = xi0 - cx0[q]
+                        d1 = xi1 - cx1[q]
+                        d2 = xi2 - cx2[q]
+                        k += d0 * d0 + d1 * d1 + d2 * d2 <= r2max
+                    k -= 1  # self, always a candidate at distance 0
+                counts[i] = k
+    return counts
 
 
 # ----------------------------------------------------------------------------- public API
@@ -389,18 +438,17 @@ def build_neighbor_list(
     g = _make_grid(n, radius, lo, hi, period, cells_per_radius)
     cc, xw, cid = _cell_coords(x, g.origin, g.width, g.ncell, g.period)
     order, cell_start = _counting_sort(cid, int(np.prod(g.ncell)))
-    rank = np.empty(n, dtype=np.int64)
-    rank[order] = np.arange(n)
     xs = _gather_columns(xw, order)
     order32 = order.astype(np.int32)
     r2max = radius * radius
-    args = (xs, order32, rank, cc, cell_start, g.ncell, g.reach, g.period, r2max)
-    counts = _count_pass(*args)
+    maxcand = _max_candidates(cell_start, g.ncell, g.reach, g.period)
+    args = (xs, order32, cell_start, g.ncell, g.reach, g.period, r2max, maxcand)
     offsets = np.zeros(n + 1, dtype=np.int64)
+    counts = _cell_pass(*args, offsets, np.zeros(0, np.int32))
     np.cumsum(counts, out=offsets[1:])
     indices = np.empty(int(offsets[-1]), dtype=np.int32)
     if indices.shape[0]:
-        _fill_pass(*args, offsets, indices)
+        _cell_pass(*args, offsets, indices)
     return NeighborList(offsets, indices, radius, period)
 
 
