@@ -168,7 +168,9 @@ def _check(shape: Shape, dx: float, dim: int | None) -> None:
 
 
 def _axis_points(lo: float, hi: float, dx: float, include_boundary: bool) -> np.ndarray:
-    n = max(1, int(round((hi - lo) / dx)))
+    n = int(round((hi - lo) / dx))
+    if n == 0:  # thinner than half a spacing: no particles (build_particles reports it)
+        return np.empty(0)
     if include_boundary:
         return np.linspace(lo, hi, n + 1)
     h = (hi - lo) / n

@@ -26,7 +26,6 @@ Attribute layout of a :class:`Scene`::
 
 from __future__ import annotations
 
-import math
 import re
 import tomllib
 from dataclasses import dataclass, fields
@@ -61,6 +60,8 @@ __all__ = ["Scene", "SceneError", "load_scene", "parse_scene", "parse_scene_toml
 AXES = "xyz"
 BLOCK_KINDS = tuple(k for k in KIND_NAMES if k != "ghost")
 SHAPES = ("box", "sphere", "cylinder")
+#: a block estimated to need more particles than this is rejected (a typo in dx, usually)
+MAX_PARTICLES_PER_BLOCK = 1e8
 
 
 # --------------------------------------------------------------------------------------
@@ -346,7 +347,7 @@ def parse_scene(data, source: str = "<string>") -> Scene:
             sections[sec_name] = validate_section(SECTIONS[sec_name], data.get(sec_name), ctx)
 
     name = meta.name if meta.name is not None else _default_name(source)
-    blocks = _resolve_blocks(rec["blocks"], rec["materials"], rec["domain"], ctx)
+    blocks = _resolve_blocks(rec["blocks"], rec["materials"], rec["domain"], rec["sph"], ctx)
     return Scene(
         source=source, name=name, dim=meta.dim, description=meta.description, seed=meta.seed,
         domain=rec["domain"], sph=rec["sph"], materials=rec["materials"], blocks=blocks,
@@ -361,7 +362,7 @@ def _default_name(source: str) -> str:
     return Path(source).stem or "scene"
 
 
-def _resolve_blocks(blocks, materials, domain, ctx) -> tuple:
+def _resolve_blocks(blocks, materials, domain, sph, ctx) -> tuple:
     from sphfem.geometry import Shape
 
     out = []
@@ -388,7 +389,11 @@ def _resolve_blocks(blocks, materials, domain, ctx) -> tuple:
                 ctx.error(path, f"block {b.name!r} ({b.shape}) extends outside the domain on "
                                 f"axis {AXES[a]}: [{lo[a]:g}, {hi[a]:g}] is not within "
                                 f"[{domain.lo[a]:g}, {domain.hi[a]:g}]")
-        if not all(math.isfinite(x) for x in lo + hi):  # pragma: no cover - guarded above
-            ctx.error(path, "non-finite geometry")
+        dx = b.dx if b.dx is not None else sph.dx
+        estimate = Shape.from_block(b, ctx.dim).volume() / dx**ctx.dim
+        if not estimate <= MAX_PARTICLES_PER_BLOCK:
+            ctx.error(f"{path}.dx" if b.dx is not None else "sph.dx",
+                      f"block {b.name!r} would get about {estimate:.3g} particles (limit "
+                      f"{MAX_PARTICLES_PER_BLOCK:.0e}); the spacing is too small")
         out.append(b)
     return tuple(out)

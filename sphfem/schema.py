@@ -165,7 +165,9 @@ class Param:
     def _scalar_expectation(self, plural: bool = False) -> str:
         integer = self.type is int
         qty = self.quantity or _QUANTITY.get(self.unit, "")
-        noun = ("integer" if integer else (qty or "number")) + ("s" if plural else "")
+        noun = "integer" if integer else (qty or "number")
+        if plural:
+            noun = noun[:-1] + "ies" if re.search(r"[^aeiou]y$", noun) else noun + "s"
         unit = f" in {self.unit}" if self.unit and self.unit != "1" else ""
         rng = self._range_text()
         if self.gt == 0 and self.lt is None and self.le is None:
@@ -403,7 +405,8 @@ def import_for(name: str) -> None:
     if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", name or ""):
         return
     pkg = f"sphfem.{name}"
-    if name not in _NOT_PHYSICS and importlib.util.find_spec(pkg) is not None:
+    spec = importlib.util.find_spec(pkg) if name not in _NOT_PHYSICS else None
+    if spec is not None and spec.submodule_search_locations is not None:  # a package
         importlib.import_module(pkg)
     try:
         from sphfem.physics import MODULES as targets
@@ -572,7 +575,8 @@ def _default(p: Param, ctx: Context):
 def validate_table(section: Section, data, ctx: Context, path: str) -> Record:
     """Validate one table of ``section`` (``data`` a dict) into a :class:`Record`."""
     if not isinstance(data, Mapping):
-        ctx.error(path, f"expected a table of {section.name} keys, got {_show(data)}")
+        where = "" if path.endswith("]") else f" ([{path}])"
+        ctx.error(path, f"expected a table{where}, got {_show(data)}")
     known = section.keys
     for k in data:
         if k not in known:

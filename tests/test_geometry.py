@@ -1,0 +1,186 @@
+"""Block geometry: lattice and Poisson-disk placement, exact block masses, build_particles."""
+
+from __future__ import annotations
+
+import math
+import tomllib
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.spatial import cKDTree
+
+from sphfem.geometry import Shape, build_particles, lattice_points, poisson_points
+from sphfem.particles import KIND_NAMES
+from sphfem.scene import SceneError, parse_scene
+
+
+def test_box_lattice_cell_centred():
+    x = lattice_points(Shape.box([0, 0], [1, 1]), 0.1)
+    assert x.shape == (100, 2)
+    assert np.allclose(np.unique(x[:, 0]), 0.05 + 0.1 * np.arange(10))
+
+
+def test_box_lattice_node_aligned_patch():
+    x = lattice_points(Shape.box([0, 0], [1, 1]), 0.1, 2, include_boundary=True)
+    assert x.shape == (121, 2)
+    assert np.allclose(np.unique(x[:, 1]), 0.1 * np.arange(11))
+
+
+def test_box_lattice_tiles_exactly_when_not_a_multiple():
+    x = lattice_points(Shape.box([0.0], [1.0]), 0.3)  # round(1/0.3) = 3 cells of 1/3
+    assert np.allclose(x[:, 0], [1 / 6, 0.5, 5 / 6])
+
+
+@pytest.mark.parametrize("shape,exact", [
+    (Shape.box([0], [2]), 2.0),
+    (Shape.sphere([1.0], 0.5), 1.0),
+    (Shape.cylinder([0.0], 5.0, 2.0, "x"), 2.0),
+    (Shape.box([0, 0], [2, 3]), 6.0),
+    (Shape.sphere([0, 0], 0.5), math.pi * 0.25),
+    (Shape.cylinder([0, 0], 0.5, 2.0, "y"), 2.0),
+    (Shape.box([0, 0, 0], [1, 2, 3]), 6.0),
+    (Shape.sphere([0, 0, 0], 0.5), 4 / 3 * math.pi * 0.125),
+    (Shape.cylinder([0, 0, 0], 0.5, 2.0, "z"), math.pi * 0.25 * 2.0),
+])
+def test_volumes_and_lattice_counts(shape, exact):
+    assert shape.volume() == pytest.approx(exact, rel=1e-14)
+    dx = 0.05
+    x = lattice_points(shape, dx)
+    assert x.shape[1] == shape.dim
+    assert np.all(shape.contains(x))
+    assert x.shape[0] == pytest.approx(exact / dx**shape.dim, rel=0.05)
+    lo, hi = shape.bounds()
+    assert np.all(x >= np.array(lo)) and np.all(x <= np.array(hi))
+
+
+def test_cylinder_axis_3d():
+    x = lattice_points(Shape.cylinder([0, 0, 0], 0.2, 1.0, "x"), 0.05)
+    assert np.ptp(x[:, 0]) > 0.9 and np.ptp(x[:, 1]) < 0.4
+
+
+def test_wrong_dim_and_dx():
+    with pytest.raises(ValueError):
+        lattice_points(Shape.box([0, 0], [1, 1]), 0.1, dim=3)
+    with pytest.raises(ValueError):
+        lattice_points(Shape.box([0, 0], [1, 1]), 0.0)
+    with pytest.raises(ValueError):
+        Shape.cylinder([0, 0], 0.1, 1.0, "z")
+
+
+@pytest.mark.parametrize("shape,dx", [
+    (Shape.box([0.0], [1.0]), 0.01),
+    (Shape.sphere([0.0, 0.0], 0.5), 0.03),
+    (Shape.box([0.0, 0.0], [1.0, 0.5]), 0.03),
+    (Shape.sphere([0.0, 0.0, 0.0], 0.5), 0.1),
+])
+def test_poisson_count_spacing_determinism(shape, dx):
+    x = poisson_points(shape, dx, seed=7)
+    target = shape.volume() / dx**shape.dim
+    assert x.shape[0] == pytest.approx(target, rel=max(0.03, 1 / math.sqrt(target)) + 1e-9)
+    assert np.all(shape.contains(x))
+    d, _ = cKDTree(x).query(x, k=2)
+    assert d[:, 1].min() >= 0.6 * dx
+    assert np.array_equal(x, poisson_points(shape, dx, seed=7))
+    y = poisson_points(shape, dx, seed=8)
+    assert x.shape != y.shape or not np.array_equal(x, y)
+
+
+SCENE = """
+[scene]
+dim = 2
+seed = 5
+[domain]
+lo = [0.0, 0.0]
+hi = [1.0, 1.0]
+[sph]
+dx = 0.02
+[materials.water]
+rho0 = 1000.0
+[materials.steel]
+rho0 = 7850.0
+[[blocks]]
+name = "floor"
+shape = "box"
+kind = "wall"
+material = "steel"
+lo = [0.0, 0.0]
+hi = [1.0, 0.1]
+temperature = "20 C"
+[[blocks]]
+name = "drop"
+shape = "sphere"
+kind = "fluid"
+material = "water"
+sampling = "poisson"
+center = [0.5, 0.5]
+radius = 0.2
+velocity = [0.5, -1.0]
+temperature = 350.0
+[[blocks]]
+name = "post"
+shape = "cylinder"
+kind = "solid"
+material = "steel"
+center = [0.9, 0.4]
+radius = 0.05
+length = 0.4
+axis = "y"
+dx = 0.01
+[time]
+t_end = 1.0
+"""
+
+
+def test_build_particles_fields_and_exact_mass():
+    s = parse_scene(tomllib.loads(SCENE), source="g.toml")
+    p = build_particles(s)
+    assert p.dim == 2 and p.x.shape == (p.n, 2) and p.v.shape == (p.n, 2) and p.T.shape == (p.n,)
+    mats = {"floor": (1, KIND_NAMES["wall"], 7850.0, 0.1, 293.15, (0, 0)),
+            "drop": (0, KIND_NAMES["fluid"], 1000.0, math.pi * 0.04, 350.0, (0.5, -1.0)),
+            "post": (1, KIND_NAMES["solid"], 7850.0, 0.1 * 0.4, 293.15, (0, 0))}
+    for name, (mat, kind, rho0, area, T, v) in mats.items():
+        sel = (p.material == mat) & (p.kind == kind)
+        assert p.m[sel].sum() == pytest.approx(rho0 * area, rel=1e-12), name
+        assert np.allclose(p.rho[sel], rho0) and np.allclose(p.vol[sel], p.m[sel] / rho0)
+        assert np.allclose(p.T[sel], T) and np.allclose(p.v[sel], v)
+    assert len(np.unique(p.id)) == p.n
+    q = build_particles(s)
+    assert np.array_equal(p.x, q.x)  # deterministic for a given seed
+
+
+def test_block_too_small_for_spacing():
+    d = tomllib.loads(SCENE)
+    d["blocks"][2]["radius"] = 0.001
+    with pytest.raises(SceneError) as e:
+        build_particles(parse_scene(d, source="g.toml"))
+    assert e.value.key == "blocks[2]" and "no particles" in str(e.value)
+
+
+def test_overlap_between_blocks():
+    d = tomllib.loads(SCENE)
+    d["blocks"][2]["center"] = [0.6, 0.5]
+    with pytest.raises(SceneError) as e:
+        build_particles(parse_scene(d, source="g.toml"))
+    assert e.value.key == "blocks[2]" and "'post' overlaps block 'drop'" in str(e.value)
+
+
+@settings(max_examples=60, deadline=None)
+@given(dim=st.integers(1, 3), data=st.data())
+def test_property_box_lattice(dim, data):
+    lo = np.array(data.draw(st.lists(st.floats(-1, 1), min_size=dim, max_size=dim)))
+    ext = np.array(data.draw(st.lists(st.floats(0.05, 1), min_size=dim, max_size=dim)))
+    dx = data.draw(st.floats(0.04, 0.2)) if dim < 3 else data.draw(st.floats(0.08, 0.2))
+    shape = Shape.box(lo, lo + ext)
+    x = lattice_points(shape, dx)
+    n_axis = [round(e / dx) for e in ext]
+    assert x.shape == (int(np.prod(n_axis)), dim)
+    if min(n_axis) == 0:  # thinner than dx/2 along some axis: no particles
+        return
+    assert np.all(shape.contains(x))
+    # cell volumes tile the box exactly
+    assert np.prod(ext / n_axis) * x.shape[0] == pytest.approx(np.prod(ext), rel=1e-12)
+    xb = lattice_points(shape, dx, include_boundary=True)
+    assert xb.shape[0] == int(np.prod([n + 1 for n in n_axis]))
+    assert np.allclose(xb.min(axis=0), lo) and np.allclose(xb.max(axis=0), lo + ext)
