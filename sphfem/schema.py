@@ -24,7 +24,10 @@ Registries (global, filled at import time):
 Parameter types: ``float``, ``int``, ``bool``, ``str`` (optionally with ``choices``),
 ``VECTOR`` (floats, one per axis), ``BOOLS`` (bools, one per axis), ``STRINGS`` (list of
 str), ``TEMPERATURE`` (a number is kelvin; a string ``"100 C"``, ``"100 degC"``,
-``"100 °C"`` or ``"373.15 K"`` is converted to kelvin).
+``"100 °C"`` or ``"373.15 K"`` is converted to kelvin), ``CUSTOM`` (checked by the
+param's ``convert(value, ctx, key)``, which calls ``ctx.error(key, message)`` on a bad
+value; ``type_doc`` describes the accepted values).  Sub-sections may themselves be
+repeated (``[[heat.boundaries]]``) or open-key tables.
 
 ``python -m sphfem.schema`` rewrites ``docs/scenes.md`` from the registered declarations.
 """
@@ -46,8 +49,10 @@ VECTOR = "vector"
 BOOLS = "bools"
 STRINGS = "strings"
 TEMPERATURE = "temperature"
+#: a value checked by the param's own ``convert(value, ctx, key)`` (document it in ``type_doc``)
+CUSTOM = "custom"
 
-_TYPES = (float, int, bool, str, VECTOR, BOOLS, STRINGS, TEMPERATURE)
+_TYPES = (float, int, bool, str, VECTOR, BOOLS, STRINGS, TEMPERATURE, CUSTOM)
 
 
 class _Required:
@@ -120,8 +125,12 @@ class Param:
     when: tuple | None = None
     quantity: str = ""
     default_doc: str = ""
+    convert: Callable | None = field(default=None, compare=False)
+    type_doc: str = ""
 
     def __post_init__(self):
+        if self.type is CUSTOM and (self.convert is None or not self.type_doc):
+            raise TypeError(f"Param {self.name!r}: CUSTOM needs convert= and type_doc=")
         if self.type not in _TYPES:
             raise TypeError(f"Param {self.name!r}: unknown type {self.type!r}")
         if self.bounds is not None:
@@ -142,6 +151,8 @@ class Param:
 
     def expectation(self, dim: int | None = None) -> str:
         """What a valid value looks like, e.g. ``a positive length in m``."""
+        if self.type is CUSTOM:
+            return self.type_doc
         if self.choices is not None:
             return "one of " + ", ".join(_show(c) for c in self.choices)
         if self.type is bool:
@@ -505,6 +516,8 @@ def _convert(p: Param, v, ctx: Context, key: str):
         ctx.error(key, f"expected {p.expectation(ctx.dim)}, got {_show(v)}")
 
     t = p.type
+    if t is CUSTOM:
+        return p.convert(v, ctx, key)
     if t is bool:
         if not isinstance(v, bool):
             bad()
@@ -669,6 +682,7 @@ def _type_text(p: Param) -> str:
     return {
         float: "float", int: "int", bool: "bool", str: "str", VECTOR: "float[dim]",
         BOOLS: "bool[dim]", STRINGS: "list of str", TEMPERATURE: "temperature",
+        CUSTOM: p.type_doc,
     }[p.type] if not (p.type in (VECTOR, BOOLS) and p.length != "dim") else (
         f"{'float' if p.type is VECTOR else 'bool'}[{p.length}]")
 
@@ -720,10 +734,16 @@ def _describe(section: Section, header: str, level: int) -> list[str]:
                 f"`{p.name}`", _type_text(p), p.unit, _default_text(p), _allowed_text(p),
                 p.doc)) + " |")
         lines.append("")
+    base = header.strip("[]")
     for sub in section.subsections:
-        lines += _describe(sub, f"[{header.strip('[]').split('.<')[0]}.{sub.name}]",
-                           level + 1)
+        lines += _describe(sub, _section_header(sub, f"{base}.{sub.name}"), level + 1)
     return lines
+
+
+def _section_header(section: Section, name: str) -> str:
+    if section.repeated:
+        return f"[[{name}]]"
+    return f"[{name}.<name>]" if section.open_keys else f"[{name}]"
 
 
 _CORE_ORDER = ("scene", "domain", "sph", "materials", "blocks", "physics", "time", "output")
@@ -777,9 +797,7 @@ def describe_markdown() -> str:
         if s.module and not modules_started:
             lines += ["## Physics-module sections", ""]
             modules_started = True
-        header = (f"[[{name}]]" if s.repeated else
-                  f"[{name}.<name>]" if s.open_keys else f"[{name}]")
-        lines += _describe(s, header, 3)
+        lines += _describe(s, _section_header(s, name), 3)
     mods = sorted(known_modules())
     lines += ["## Registered physics modules", "",
               ("Names accepted in `[physics] modules`: "

@@ -475,3 +475,30 @@ def test_docs_mention_every_key():
     for sec in schema.all_sections().values():
         for p in sec.params:
             assert f"`{p.name}`" in text
+
+
+def test_custom_param_and_repeated_subsection():
+    def face(v, ctx, key):
+        if v in ("insulated", "free"):
+            return v
+        if isinstance(v, list) and len(v) == 2 and v[0] == "dirichlet":
+            return ("dirichlet", schema.convert(Param("T", schema.TEMPERATURE), v[1], ctx, key))
+        ctx.error(key, f'expected "insulated", "free" or ["dirichlet", T], got {v!r}')
+
+    bnd = Section("boundaries", (Param("xmin", schema.CUSTOM, "insulated", convert=face,
+                                       type_doc="face condition"),), repeated=True)
+    schema.register_module("_bc", Section("_bc", (), subsections=(bnd,)))
+    try:
+        d = mutate(base(), "physics.modules", ["_bc"])
+        d["_bc"] = {"boundaries": [{"xmin": ["dirichlet", "100 C"]}, {}]}
+        s = parse_scene(d)
+        assert s._bc.boundaries[0].xmin == ("dirichlet", pytest.approx(373.15))
+        assert s._bc.boundaries[1].xmin == "insulated"
+        assert parse_scene(s.to_dict()) == s
+        d["_bc"] = {"boundaries": [{}, {"xmin": "hot"}]}
+        with pytest.raises(SceneError) as e:
+            parse_scene(d)
+        assert e.value.key == "_bc.boundaries[1].xmin"
+        assert "face condition" in schema.describe_markdown()
+    finally:
+        schema.unregister("_bc")
