@@ -335,6 +335,9 @@ def parse_scene(data, source: str = "<string>") -> Scene:
                       + (hint if hint.startswith("; did") else "") + f" (registered: {reg})")
         if m in modules[:i]:
             ctx.error(f"physics.modules[{i}]", f"module {m!r} is listed twice")
+    blocks = _resolve_blocks(rec["blocks"], rec["materials"], rec["domain"], rec["sph"], ctx)
+    # module sections' check(rec, ctx, path) may cross-reference the core: ctx.core["blocks"]
+    ctx.core = {"scene": meta, **rec, "blocks": blocks}
     sections = {}
     for key in data:
         sec = SECTIONS[key]
@@ -347,7 +350,6 @@ def parse_scene(data, source: str = "<string>") -> Scene:
             sections[sec_name] = validate_section(SECTIONS[sec_name], data.get(sec_name), ctx)
 
     name = meta.name if meta.name is not None else _default_name(source)
-    blocks = _resolve_blocks(rec["blocks"], rec["materials"], rec["domain"], rec["sph"], ctx)
     return Scene(
         source=source, name=name, dim=meta.dim, description=meta.description, seed=meta.seed,
         domain=rec["domain"], sph=rec["sph"], materials=rec["materials"], blocks=blocks,

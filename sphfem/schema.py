@@ -445,6 +445,9 @@ class Context:
     def __init__(self, source: str = "<string>", dim: int | None = None):
         self.source = source
         self.dim = dim
+        #: validated core sections (name -> record; "blocks" a tuple with names filled in),
+        #: set before physics-module sections are validated, for their cross-key checks
+        self.core: dict[str, Any] = {}
 
     def error(self, key: str, message: str):
         raise SceneError(self.source, key, message)

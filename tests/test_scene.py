@@ -502,3 +502,21 @@ def test_custom_param_and_repeated_subsection():
         assert "face condition" in schema.describe_markdown()
     finally:
         schema.unregister("_bc")
+
+
+def test_module_check_sees_core_sections():
+    def check(rec, ctx, path):
+        names = [b.name for b in ctx.core["blocks"]]
+        if rec.block not in names:
+            ctx.error(f"{path}.block", f"no block named {rec.block!r}")
+
+    schema.register_module("_ref", Section("_ref", (Param("block", str, "floor"),),
+                                           check=check))
+    try:
+        d = mutate(base(), "physics.modules", ["_ref"])
+        assert parse_scene(d)._ref.block == "floor"
+        d["_ref"] = {"block": "nope"}
+        with pytest.raises(SceneError, match=r"_ref.block: no block named 'nope'"):
+            parse_scene(d)
+    finally:
+        schema.unregister("_ref")
