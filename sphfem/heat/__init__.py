@@ -10,6 +10,7 @@ problems), :mod:`~sphfem.heat.params` (parameters), :mod:`~sphfem.heat.module` (
 nothing is compiled until it is used.
 """
 
-from sphfem.physics import register_physics
+from sphfem.heat.scene_section import HEAT
+from sphfem.schema import register_module
 
-register_physics("heat", "sphfem.heat.module:HeatConduction")
+register_module("heat", HEAT, target="sphfem.heat.module:HeatConduction")

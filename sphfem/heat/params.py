@@ -62,7 +62,7 @@ class HeatParams:
     implicit_dt_factor: float | None = None
     dt: float | None = None
     cfl: float = 1.0
-    startup: int = 2
+    startup: int = 1
     free_surface_plain: float = 0.95
     eta_place: float = 0.85
     eta_trim: float = 1.3
@@ -88,3 +88,27 @@ class HeatParams:
             raise ValueError("heat.insulated_source must be 'mirror' or 'nearest'")
         if not 0.0 < self.eta_place < self.eta_trim:
             raise ValueError("heat: need 0 < eta_place < eta_trim")
+
+
+def params_from_scene(scene) -> HeatParams:
+    """:class:`HeatParams` from a validated scene's ``[heat]`` section and its box blocks."""
+    h = scene.heat
+    keys = ("laplacian", "time_integration", "theta", "implicit_dt_factor", "dt", "cfl",
+            "startup", "free_surface_plain", "eta_place", "eta_trim", "dirichlet_ghosts",
+            "insulated_source")
+    kw = {k: h[k] for k in keys} if h is not None else {}
+    boundaries = {}
+    for b in (h.boundaries if h is not None else ()):
+        blk = scene.blocks[scene.block_index(b.block)]
+        if blk.shape != "box":
+            raise ValueError(f"heat.boundaries: block {b.block!r} is a {blk.shape}; "
+                             "faces are defined for box blocks only")
+        faces = boundaries.setdefault(b.block, BoxBoundary(tuple(blk.lo), tuple(blk.hi), {}))
+        faces.faces[b.face] = ((b.condition, b.temperature) if b.condition == "dirichlet"
+                               else b.condition)
+    mats = {}
+    for i, m in enumerate(scene.materials.values()):
+        if m.c is None or m.k is None:
+            continue
+        mats[i] = ThermalMaterial(m.c, m.k)
+    return HeatParams(**kw, boundaries=list(boundaries.values()), materials=mats)

@@ -60,7 +60,7 @@ class HeatProblem:
         return self.system.energy(self.T, self.m, self.c)
 
     def run(self, t_end: float, dt: float | None = None, implicit: bool = False,
-            theta: float = 1.0, startup: int = 2) -> RunResult:
+            theta: float = 1.0, startup: int = 1) -> RunResult:
         """Advance to ``t_end`` with equal steps no larger than ``dt`` (default: the
         explicit stable step); the problem's ``T`` is updated in place."""
         dt = self.stable_dt if dt is None else dt

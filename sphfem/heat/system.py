@@ -72,6 +72,8 @@ class HeatSystem:
         self.fallbacks = int((~ok[self.active]).sum())
         # conductances to non-active neighbours (ghosts, held particles): boundary heat
         self.g_outside = np.where(self.active[indices], 0.0, self.g)
+        self._vol_active = np.ascontiguousarray(vol[self.active])
+        self._inactive = np.flatnonzero(~self.active)
 
     # -- ghosts --------------------------------------------------------------------------
     def apply_ghosts(self, T: np.ndarray) -> None:
@@ -89,7 +91,7 @@ class HeatSystem:
     def rate(self, T: np.ndarray) -> np.ndarray:
         """dT/dt of every particle (zero where not active); ghosts must be up to date."""
         r = op.apply_pair_weights(T, self.g, self.offsets, self.indices) / self.rho_c
-        r[~self.active] = 0.0
+        r[self._inactive] = 0.0
         return r
 
     def matrix(self, T_held: np.ndarray | None = None):
@@ -147,7 +149,7 @@ class HeatSystem:
         d/dt sum m c T equals this to round-off; see :class:`EnergyLedger`.
         """
         q = op.apply_pair_weights(T, self.g_outside, self.offsets, self.indices)
-        return float(np.sum(self.vol[self.active] * q[self.active]))
+        return float(np.dot(self._vol_active, q[self.active_index]))
 
     def energy(self, T: np.ndarray, m: np.ndarray, c: np.ndarray) -> float:
         """Thermal energy sum_i m_i c_i T_i over the active particles [J]."""

@@ -18,7 +18,7 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 CASES: dict[str, Callable[[bool], CaseResult]] = {}
-_CASE_MODULES = ("sphfem.validation.operators",)
+_CASE_MODULES = ("sphfem.validation.operators", "sphfem.validation.heat")
 
 
 @dataclass

@@ -1,0 +1,139 @@
+"""``HeatConduction``: the ``heat`` physics module (protocol of :mod:`sphfem.physics`).
+
+On ``init`` it reads c and k per material, places ghost particles for the scene's
+boundaries (algorithm 2.5) and appends them to the particle set as kind GHOST (the
+neighbour list is rebuilt once), builds the conduction system and its stepper: explicit
+Heun at ``cfl`` times the stable step, or the theta method at ``dt`` or
+``implicit_dt_factor`` times it.  The pair conductances are computed once; if another
+module moves particles they are recomputed from the current neighbour list every step
+(ghosts keep their places).  ``diagnostics`` reports the explicit limit, the fallbacks of
+the corrected operator, the ghost counts and the energy ledger (drift and balance).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from sphfem.heat.params import HeatParams, params_from_scene
+from sphfem.particles import GHOST, ParticleSet
+from sphfem.physics import PhysicsModule
+
+
+class HeatConduction(PhysicsModule):
+    name = "heat"
+
+    def __init__(self, scene, params: HeatParams | None = None):
+        super().__init__(scene)
+        self.params = params if params is not None else params_from_scene(scene)
+        self.system = None
+
+    def fields(self):
+        return {"T": (np.float64, 1), "c_heat": (np.float64, 1), "k_heat": (np.float64, 1)}
+
+    # -- set-up --------------------------------------------------------------------------
+    def init(self, sim) -> None:
+        from sphfem.heat.ghosts import place_ghosts
+        from sphfem.heat.problem import faces_of
+
+        prm = self.params
+        ps = sim.particles
+        if np.any(ps.kind == GHOST):  # re-init after a checkpoint: place the ghosts anew
+            sim.particles = ps = ps.select(ps.kind != GHOST)
+            sim.update_neighbors()
+        for mid, mat in prm.materials.items():
+            sel = ps.material == mid
+            ps.c_heat[sel] = mat.c
+            ps.k_heat[sel] = mat.k
+        if np.any(ps.c_heat <= 0):
+            raise ValueError("heat: every material needs a positive specific heat c")
+        if prm.initial_temperature is not None:
+            ps.T[:] = prm.initial_temperature
+        n = ps.n
+        faces = faces_of(prm.boundaries)
+        dx = float(np.median(ps.vol)) ** (1.0 / ps.dim)
+        gh = place_ghosts(ps.x, ps.vol, dx, sim.R, faces, eta_place=prm.eta_place,
+                          eta_trim=prm.eta_trim, neumann_source=prm.insulated_source,
+                          kernel=_kernel_name(sim.kind))
+        if gh.n:
+            s = gh.source
+            g = ParticleSet.from_arrays(gh.x, m=ps.m[s], rho=ps.rho[s], kind=GHOST,
+                                        material=ps.material[s])
+            for f in ("T", "c_heat", "k_heat"):
+                g.fields[f] = ps.fields[f][s].copy()
+            ps.append(g)
+            sim.update_neighbors()
+        self.ghosts = gh
+        self._ghost_index = np.arange(n, n + gh.n)
+        self._ghost_source = gh.source.copy()
+        self._build(sim)
+        from sphfem.heat.energy import EnergyLedger
+
+        self.ledger = EnergyLedger(self.system.energy(ps.T, ps.m, ps.c_heat))
+        self.stable_dt_explicit = self.system.stable_dt()
+
+    def _build(self, sim) -> None:
+        from sphfem.heat.problem import free_surface_rows
+        from sphfem.heat.stepping import ExplicitStepper, ThetaStepper
+        from sphfem.heat.system import HeatSystem
+
+        prm, ps = self.params, sim.particles
+        args = sim.kernel_args
+        active = ps.kind != GHOST
+        plain = (free_surface_rows(args, prm.free_surface_plain)
+                 if prm.laplacian != "cleary" else None)
+        gh = self.ghosts
+        self.system = HeatSystem(args, ps.m * ps.c_heat / ps.vol, ps.k_heat, active,
+                                 self._ghost_index, gh.type, self._ghost_source, gh.t_wall,
+                                 laplacian=prm.laplacian, dirichlet_mode=prm.dirichlet_ghosts,
+                                 plain_rows=plain)
+        self.system.apply_ghosts(ps.T)
+        if prm.time_integration == "explicit":
+            self.stepper = ExplicitStepper(self.system)
+        else:
+            self.stepper = ThetaStepper(self.system, prm.theta, prm.startup)
+        self._nbrs = sim.nbrs
+
+    # -- stepping ------------------------------------------------------------------------
+    def dt_limits(self, sim) -> dict[str, float]:
+        prm = self.params
+        dt0 = self.system.stable_dt()
+        if prm.time_integration == "explicit":
+            return {"thermal": prm.cfl * dt0}
+        if prm.dt is not None:
+            return {"thermal_implicit": prm.dt}
+        if prm.implicit_dt_factor is not None:
+            return {"thermal_implicit": prm.implicit_dt_factor * dt0}
+        return {}
+
+    def step(self, sim, dt: float) -> None:
+        if sim.nbrs is not self._nbrs:  # particles moved: conductances from the new list
+            self._build(sim)
+        ps = sim.particles
+        heat = self.stepper.step(ps.T, dt)
+        self.ledger.record(self.system.energy(ps.T, ps.m, ps.c_heat), heat)
+
+    def diagnostics(self, sim) -> dict:
+        s = self.system
+        ps = sim.particles
+        a = s.active
+        dx2 = (ps.vol[a] ** (2.0 / ps.dim))
+        rows = np.repeat(np.arange(s.n), np.diff(s.offsets))
+        gsum = np.bincount(rows, weights=np.abs(s.g), minlength=s.n)[a]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            C = np.where(gsum > 0, s.k[a] / (gsum * dx2), np.inf)
+        return {
+            "laplacian": s.laplacian,
+            "time_integration": self.params.time_integration,
+            "explicit_stable_dt_s": self.stable_dt_explicit,
+            "explicit_dt_constant_C": float(C.min()) if C.size else None,
+            "fallbacks": s.fallbacks,
+            "free_surface_plain_rows": int(s.plain_rows.sum()),
+            "ghosts": dict(self.ghosts.stats),
+            **self.ledger.to_dict(),
+        }
+
+
+def _kernel_name(code: int) -> str:
+    from sphfem.kernels import KERNELS
+
+    return next(k for k, v in KERNELS.items() if v == code)
