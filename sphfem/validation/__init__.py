@@ -18,7 +18,8 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 CASES: dict[str, Callable[[bool], CaseResult]] = {}
-_CASE_MODULES = ("sphfem.validation.operators", "sphfem.validation.heat")
+_CASE_MODULES = ("sphfem.validation.operators", "sphfem.validation.heat",
+                 "sphfem.validation.fluid")
 
 
 @dataclass

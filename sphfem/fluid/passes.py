@@ -1,0 +1,321 @@
+"""Fused numba passes of one weakly compressible delta-SPH force evaluation.
+
+Notation (as in :mod:`sphfem.operators`): for particle i and neighbour j, ``r = x_j - x_i``
+(minimum image on periodic axes), ``d = |r|``, and ``F = -dW/dr / d >= 0`` so that
+``grad_i W_ij = F r``.  Every pass is a gather over destination particles (iteration i
+writes row i only), so results do not depend on the thread count.  The neighbour list may
+hold pairs beyond the support R (a Verlet list with a skin); they are skipped before the
+square root.
+
+Per-particle inputs prepared by :func:`prepare_fluid` / :func:`prepare_all`:
+``pr = p / rho^2``, ``V`` (volume: m / rho for fluid, the fixed ``vol`` for walls),
+``meff`` (mass: m for fluid, rho_w V_w for walls), ``isf`` (1.0 for fluid, 0.0 otherwise)
+and ``vg`` (velocity seen by the viscous term: v for fluid, the Adami ghost velocity for
+walls).
+
+Passes (Park 2019 equation numbers in brackets):
+
+* :func:`density_gradient` -- renormalisation matrix B_i and the renormalised density
+  gradient <grad rho>_i = B_i sum_j V_j (rho_j - rho_i) grad_i W_ij in one loop [2.90-2.91];
+* :func:`fluid_forces` -- for fluid rows: symmetric pressure gradient [2.85], Morris laminar
+  viscosity with per-particle mu and (rho_i + rho_j)^2 [2.86], continuity [2.87] with the
+  delta-SPH diffusive term of Antuono et al. (2010) / Marrone et al. (2011) [2.88-2.89]
+  (fluid-fluid pairs only), body force; for wall rows: the force the wall particle receives
+  from the fluid, the exact negative of the pair forces on the fluid.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numba import njit, prange
+
+from sphfem.fluid.eos import tait_pressure
+from sphfem.kernels import kernel_dfdq
+from sphfem.neighbors import min_image
+from sphfem.particles import FLUID, WALL
+
+FASTMATH = {"reassoc", "contract", "arcp", "afn"}
+
+
+@njit(cache=True, parallel=True, fastmath=FASTMATH)
+def prepare_fluid(rho, m, v, kind, rho0, B, gamma, p, vg):
+    """Tait pressure and viscous velocity of the fluid particles."""
+    n = rho.shape[0]
+    dim = v.shape[1]
+    for i in prange(n):
+        if kind[i] == FLUID:
+            p[i] = tait_pressure(rho[i], rho0, B, gamma)
+            for k in range(dim):
+                vg[i, k] = v[i, k]
+
+
+@njit(cache=True, parallel=True, fastmath=FASTMATH)
+def prepare_all(rho, p, m, vol, kind, pr, V, meff, isf):
+    """p / rho^2, volume, effective mass and the fluid flag of every particle."""
+    n = rho.shape[0]
+    for i in prange(n):
+        r = rho[i]
+        if kind[i] == FLUID:
+            pr[i] = p[i] / (r * r)
+            V[i] = m[i] / r
+            meff[i] = m[i]
+            isf[i] = 1.0
+        elif kind[i] == WALL:
+            pr[i] = p[i] / (r * r)
+            V[i] = vol[i]
+            meff[i] = r * vol[i]
+            isf[i] = 0.0
+        else:  # other kinds do not interact with the fluid
+            pr[i] = 0.0
+            V[i] = 0.0
+            meff[i] = 0.0
+            isf[i] = 0.0
+
+
+@njit(cache=True, inline="always")
+def _sep(x, i, j, dim, period, periodic):
+    """Components of r = x_j - x_i (zero-padded to 3) with the minimum image if needed."""
+    r0 = x[j, 0] - x[i, 0]
+    r1 = x[j, 1] - x[i, 1] if dim > 1 else 0.0
+    r2 = x[j, 2] - x[i, 2] if dim > 2 else 0.0
+    if periodic:
+        r0 = min_image(r0, period[0])
+        if dim > 1:
+            r1 = min_image(r1, period[1])
+        if dim > 2:
+            r2 = min_image(r2, period[2])
+    return r0, r1, r2
+
+
+@njit(cache=True, inline="always")
+def _invert(M, dim, Binv, cond_max):
+    """Explicit inverse of a 1x1..3x3 matrix into ``Binv``; False if worse than cond_max."""
+    na = 0.0
+    for q in range(dim):
+        s = 0.0
+        for p in range(dim):
+            s += abs(M[p, q])
+        na = max(na, s)
+    if na == 0.0:
+        return False
+    if dim == 1:
+        Binv[0, 0] = 1.0 / M[0, 0]
+    elif dim == 2:
+        det = M[0, 0] * M[1, 1] - M[0, 1] * M[1, 0]
+        if abs(det) < 1e-14 * na * na:
+            return False
+        Binv[0, 0] = M[1, 1] / det
+        Binv[0, 1] = -M[0, 1] / det
+        Binv[1, 0] = -M[1, 0] / det
+        Binv[1, 1] = M[0, 0] / det
+    else:
+        c00 = M[1, 1] * M[2, 2] - M[1, 2] * M[2, 1]
+        c01 = M[1, 2] * M[2, 0] - M[1, 0] * M[2, 2]
+        c02 = M[1, 0] * M[2, 1] - M[1, 1] * M[2, 0]
+        det = M[0, 0] * c00 + M[0, 1] * c01 + M[0, 2] * c02
+        if abs(det) < 1e-14 * na * na * na:
+            return False
+        idet = 1.0 / det
+        Binv[0, 0] = c00 * idet
+        Binv[1, 0] = c01 * idet
+        Binv[2, 0] = c02 * idet
+        Binv[0, 1] = (M[0, 2] * M[2, 1] - M[0, 1] * M[2, 2]) * idet
+        Binv[1, 1] = (M[0, 0] * M[2, 2] - M[0, 2] * M[2, 0]) * idet
+        Binv[2, 1] = (M[0, 1] * M[2, 0] - M[0, 0] * M[2, 1]) * idet
+        Binv[0, 2] = (M[0, 1] * M[1, 2] - M[0, 2] * M[1, 1]) * idet
+        Binv[1, 2] = (M[0, 2] * M[1, 0] - M[0, 0] * M[1, 2]) * idet
+        Binv[2, 2] = (M[0, 0] * M[1, 1] - M[0, 1] * M[1, 0]) * idet
+    ni = 0.0
+    for q in range(dim):
+        s = 0.0
+        for p in range(dim):
+            s += abs(Binv[p, q])
+        ni = max(ni, s)
+    c = na * ni
+    return c <= cond_max and np.isfinite(c)
+
+
+@njit(cache=True, parallel=True, fastmath=FASTMATH)
+def density_gradient(x, rho, V, kind, offsets, indices, R, sigma, kkind, period, cond_max,
+                     grad, ok):
+    """Renormalised density gradient of every fluid particle (rows of others are zeroed).
+
+    Sums over all interacting neighbours (fluid and wall).  Where the moment matrix is
+    singular or worse conditioned than ``cond_max`` (free surface, sparse splashes),
+    ``ok[i] = False`` and the plain difference gradient is used.
+    """
+    n, dim = x.shape
+    R2 = R * R
+    fac = sigma / R
+    periodic = False
+    for k in range(dim):
+        periodic |= period[k] > 0.0
+    for i in prange(n):
+        if kind[i] != FLUID:
+            for k in range(dim):
+                grad[i, k] = 0.0
+            ok[i] = True
+            continue
+        M = np.zeros((3, 3))
+        g0 = 0.0
+        g1 = 0.0
+        g2 = 0.0
+        ri = rho[i]
+        for jj in range(offsets[i], offsets[i + 1]):
+            j = indices[jj]
+            r0, r1, r2 = _sep(x, i, j, dim, period, periodic)
+            d2 = r0 * r0 + r1 * r1 + r2 * r2
+            if d2 >= R2 or d2 == 0.0:
+                continue
+            d = np.sqrt(d2)
+            s = V[j] * (-fac * kernel_dfdq(d / R, kkind) / d)  # V_j F
+            t = s * (rho[j] - ri)
+            g0 += t * r0
+            g1 += t * r1
+            g2 += t * r2
+            M[0, 0] += s * r0 * r0
+            M[0, 1] += s * r0 * r1
+            M[0, 2] += s * r0 * r2
+            M[1, 1] += s * r1 * r1
+            M[1, 2] += s * r1 * r2
+            M[2, 2] += s * r2 * r2
+        M[1, 0] = M[0, 1]
+        M[2, 0] = M[0, 2]
+        M[2, 1] = M[1, 2]
+        Bi = np.zeros((3, 3))
+        good = _invert(M, dim, Bi, cond_max)
+        ok[i] = good
+        g = (g0, g1, g2)
+        for p in range(dim):
+            if good:
+                acc = 0.0
+                for q in range(dim):
+                    acc += Bi[p, q] * g[q]
+                grad[i, p] = acc
+            else:
+                grad[i, p] = g[p]
+
+
+@njit(cache=True, parallel=True, fastmath=FASTMATH)
+def fluid_forces(x, v, vg, rho, pr, V, meff, isf, mu, grad, kind, offsets, indices,
+                 R, sigma, kkind, period, gravity, eps2, delta_coef, art_coef, acc, drho,
+                 f_wall):
+    """Accelerations and density rates of fluid particles; fluid forces on wall particles.
+
+    ``eps2`` is the viscous regulariser (eps_visc h^2), ``delta_coef = delta h c0`` (0: no
+    diffusive term), ``art_coef = alpha h c0`` (0: no artificial viscosity; Monaghan 1992
+    in the always-on form of Marrone et al. 2011, symmetrised: pair acceleration
+    2 m_j alpha h c0 / (rho_i + rho_j) (u_ji . r) r F / (r^2 + eps2)).  Fluid rows of
+    ``acc`` (m/s^2) and ``drho`` (kg/m^3/s) and wall rows of
+    ``f_wall`` (N) are written; other rows are zeroed.
+    """
+    n, dim = x.shape
+    R2 = R * R
+    fac = sigma / R
+    periodic = False
+    for k in range(dim):
+        periodic |= period[k] > 0.0
+    use_delta = delta_coef != 0.0
+    for i in prange(n):
+        ki = kind[i]
+        a0 = 0.0
+        a1 = 0.0
+        a2 = 0.0
+        cont = 0.0
+        diff = 0.0
+        if ki != FLUID and ki != WALL:
+            for k in range(dim):
+                acc[i, k] = 0.0
+                f_wall[i, k] = 0.0
+            drho[i] = 0.0
+            continue
+        fl = ki == FLUID
+        ri = rho[i]
+        pri = pr[i]
+        mui = mu[i]
+        vi0 = v[i, 0]
+        vi1 = v[i, 1] if dim > 1 else 0.0
+        vi2 = v[i, 2] if dim > 2 else 0.0
+        if fl:
+            wi0 = vi0
+            wi1 = vi1
+            wi2 = vi2
+        else:  # a wall row sees the fluid with its ghost velocity
+            wi0 = vg[i, 0]
+            wi1 = vg[i, 1] if dim > 1 else 0.0
+            wi2 = vg[i, 2] if dim > 2 else 0.0
+        gi0 = grad[i, 0]
+        gi1 = grad[i, 1] if dim > 1 else 0.0
+        gi2 = grad[i, 2] if dim > 2 else 0.0
+        for jj in range(offsets[i], offsets[i + 1]):
+            j = indices[jj]
+            fj = isf[j]
+            if not fl and fj == 0.0:
+                continue  # wall-wall
+            mj = meff[j]
+            if mj == 0.0:
+                continue  # a particle kind that does not interact with the fluid
+            r0, r1, r2 = _sep(x, i, j, dim, period, periodic)
+            d2 = r0 * r0 + r1 * r1 + r2 * r2
+            if d2 >= R2 or d2 == 0.0:
+                continue
+            d = np.sqrt(d2)
+            F = -fac * kernel_dfdq(d / R, kkind) / d
+            rj = rho[j]
+            # pressure, eq. 2.85: -m_j (p_i/rho_i^2 + p_j/rho_j^2) grad_i W
+            cp = -mj * (pri + pr[j]) * F
+            # viscosity, eq. 2.86: wall neighbours take the fluid's mu
+            if fl:
+                muj = fj * mu[j] + (1.0 - fj) * mui
+            else:
+                muj = mu[j]
+                mui = muj
+            rs = ri + rj
+            cv = mj * 4.0 * (mui + muj) / (rs * rs) * F * d2 / (d2 + eps2)
+            if fl:
+                u0 = vg[j, 0] - vi0
+                u1 = (vg[j, 1] - vi1) if dim > 1 else 0.0
+                u2 = (vg[j, 2] - vi2) if dim > 2 else 0.0
+            else:
+                u0 = v[j, 0] - wi0
+                u1 = (v[j, 1] - wi1) if dim > 1 else 0.0
+                u2 = (v[j, 2] - wi2) if dim > 2 else 0.0
+            if art_coef != 0.0:
+                cp += 2.0 * mj * art_coef / rs * F * (u0 * r0 + u1 * r1 + u2 * r2) / (d2 + eps2)
+            a0 += cp * r0 + cv * u0
+            a1 += cp * r1 + cv * u1
+            a2 += cp * r2 + cv * u2
+            if fl:
+                # continuity, eq. 2.87: rho_i sum V_j (v_i - v_j) . grad_i W (wall: its own v)
+                vr = -(v[j, 0] - vi0) * r0
+                if dim > 1:
+                    vr -= (v[j, 1] - vi1) * r1
+                if dim > 2:
+                    vr -= (v[j, 2] - vi2) * r2
+                VF = V[j] * F
+                cont += VF * vr
+                if use_delta:
+                    gs = (gi0 + grad[j, 0]) * r0
+                    if dim > 1:
+                        gs += (gi1 + grad[j, 1]) * r1
+                    if dim > 2:
+                        gs += (gi2 + grad[j, 2]) * r2
+                    psi = (rj - ri) - 0.5 * gs
+                    diff += fj * psi * VF
+        if fl:
+            acc[i, 0] = a0 + gravity[0]
+            if dim > 1:
+                acc[i, 1] = a1 + gravity[1]
+            if dim > 2:
+                acc[i, 2] = a2 + gravity[2]
+            drho[i] = ri * cont + delta_coef * 2.0 * diff
+            for k in range(dim):
+                f_wall[i, k] = 0.0
+        else:
+            mi = meff[i]
+            f_wall[i, 0] = mi * a0
+            if dim > 1:
+                f_wall[i, 1] = mi * a1
+            if dim > 2:
+                f_wall[i, 2] = mi * a2
+            drho[i] = 0.0  # a wall's acc (prescribed acceleration) is left alone

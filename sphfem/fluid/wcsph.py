@@ -1,0 +1,477 @@
+"""Weakly compressible delta-SPH fluid: parameters, the solver and the physics module.
+
+Equations (Park 2019 sec. 2.4.3.1; Antuono et al. 2010; Marrone et al. 2011):
+
+    Du_i/Dt  = -sum_j m_j (p_i/rho_i^2 + p_j/rho_j^2) grad_i W_ij                    (2.85)
+               + sum_j 4 m_j (mu_i + mu_j) (x_ij . grad_i W_ij) / ((rho_i + rho_j)^2
+                 (r_ij^2 + 0.01 h^2)) u_ij + g                                      (2.86)
+    Drho_i/Dt = rho_i sum_j V_j (u_i - u_j) . grad_i W_ij + delta h c0 D_i          (2.87-2.91)
+    p = rho0 c0^2 / gamma ((rho/rho0)^gamma - 1)                                    (2.73)
+
+with h = R / 2 (half the support radius, as in Antuono/Marrone) and D_i the diffusive term
+with the renormalised density gradient (fluid-fluid pairs).  Walls: Adami, Hu & Adams
+(2012), see :mod:`sphfem.fluid.walls_adami2012`.  Each wall particle's ``f_fluid`` holds the
+force [N] it receives from the fluid (pressure + viscous pair forces), the exact negative of
+what the fluid feels from it.
+
+Time integration: symplectic position Verlet in the predictor-corrector form of DualSPHysics
+(Gomez-Gesteira et al. 2012), one force evaluation per step, second order:
+
+    x* = x + dt/2 v,  v* = v + dt/2 a,  rho* = rho + dt/2 Drho      (a, Drho of the last step)
+    a, Drho = forces(x*, v*, rho*)
+    v' = v + dt a,  rho' = rho + dt Drho,  x' = x* + dt/2 v'
+
+Time-step limits (h = R/2), each reported by name: acoustic ``cfl h / (c0 + |v|max)``,
+viscous ``visc_cfl h^2 min(rho/mu)``, force ``force_cfl sqrt(h / |a|max)``.
+
+Neighbours: a Verlet list of radius R (1 + skin), rebuilt only when some fluid particle at
+the half-step position would have moved more than skin R / 2 since the last build; the
+particles are cell-sorted every ``sort_every`` rebuilds (all fields of the ParticleSet are
+permuted together).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+from dataclasses import dataclass, field
+
+import numba
+import numpy as np
+from numba import njit, prange
+
+from sphfem import kernels
+from sphfem.fluid import passes
+from sphfem.fluid.eos import tait_B
+from sphfem.fluid.guards import check_fluid
+from sphfem.fluid.walls_adami2012 import adami_wall_state
+from sphfem.neighbors import build_neighbor_list, cell_sort_permutation, min_image
+from sphfem.particles import FLUID, ParticleSet
+from sphfem.physics import PhysicsModule, register_physics
+
+logger = logging.getLogger(__name__)
+
+FASTMATH = passes.FASTMATH
+
+#: below this many particles the automatic thread choice runs the passes on one thread
+SERIAL_BELOW = 20_000
+
+
+class _threads:
+    """Context manager setting numba's thread count (0: leave it) and restoring it."""
+
+    def __init__(self, k: int):
+        self.k = k
+
+    def __enter__(self):
+        if self.k:
+            self.old = numba.get_num_threads()
+            numba.set_num_threads(min(self.k, numba.config.NUMBA_NUM_THREADS))
+
+    def __exit__(self, *exc):
+        if self.k:
+            numba.set_num_threads(self.old)
+
+
+@dataclass
+class FluidParams:
+    """Parameters of the WCSPH fluid (SI units).
+
+    rho0       reference density [kg/m^3]
+    c0         numerical speed of sound [m/s] (>= 10 |v|max and >= 10 sqrt(g H))
+    gamma      Tait exponent [-]
+    mu         dynamic viscosity [Pa s] given to fluid particles whose ``mu`` field is 0
+    delta      delta-SPH diffusion coefficient [-] (0: off)
+    alpha      artificial viscosity coefficient [-] of the delta-SPH momentum equation
+               (Monaghan 1992 / Marrone et al. 2011; 0: off, 0.01-0.05 for free-surface
+               flows at high Reynolds number), added to the laminar viscosity
+    gravity    body force per unit mass [m/s^2], one entry per axis
+    gravity_ramp  time [s] over which the body force rises smoothly from 0 (half a sine
+               period); lets a column at rest settle without exciting its acoustic modes
+    cfl, visc_cfl, force_cfl   coefficients of the three time-step limits [-]
+    eps_visc   viscous regulariser as a fraction of h^2 [-]
+    skin       Verlet-list skin as a fraction of R [-]
+    sort_every cell-sort the particles every this many neighbour rebuilds
+    cond_max   largest accepted condition number of the renormalisation matrix
+    max_speed_factor   guard: stop if a fluid speed exceeds this multiple of c0
+    rho_ratio_band     guard: stop if rho/rho0 leaves this interval
+    threads    numba threads for the fluid passes (0: automatic -- one thread below
+               ``SERIAL_BELOW`` particles, where thread start-up costs more than it saves,
+               numba's default above)
+    """
+
+    rho0: float = 1000.0
+    c0: float = 10.0
+    gamma: float = 7.0
+    mu: float = 1.0e-3
+    delta: float = 0.1
+    alpha: float = 0.0
+    gravity: tuple = (0.0, 0.0)
+    gravity_ramp: float = 0.0
+    cfl: float = 0.25
+    visc_cfl: float = 0.125
+    force_cfl: float = 0.25
+    eps_visc: float = 1e-3
+    skin: float = 0.15
+    sort_every: int = 10
+    cond_max: float = 1e8
+    max_speed_factor: float = 1.0
+    rho_ratio_band: tuple = (0.8, 1.25)
+    threads: int = 0
+
+    def __post_init__(self):
+        for k in ("rho0", "c0", "gamma"):
+            if not getattr(self, k) > 0:
+                raise ValueError(f"fluid {k} must be positive, got {getattr(self, k)}")
+        if self.mu < 0 or self.delta < 0 or self.skin < 0 or self.alpha < 0:
+            raise ValueError("fluid mu, delta, alpha and skin must be non-negative")
+        lo, hi = self.rho_ratio_band
+        if not 0 < lo < 1 < hi:
+            raise ValueError(f"rho_ratio_band must satisfy 0 < lo < 1 < hi, got {(lo, hi)}")
+
+
+#: per-particle fields of the fluid (name -> (dtype, components or "dim"))
+FIELDS = {"v": "dim", "acc": "dim", "drho": 1, "p": 1, "mu": 1, "f_fluid": "dim"}
+
+
+def add_fluid_fields(particles: ParticleSet) -> None:
+    """Allocate the fluid's fields (zero-filled) if they are missing."""
+    for name, nc in FIELDS.items():
+        particles.add_field(name, particles.dim if nc == "dim" else nc)
+
+
+@njit(cache=True, parallel=True)
+def _max_disp_sq(x, xref, v, half_dt, kind, period):
+    """max over fluid of |x + half_dt v - xref|^2 (minimum image on periodic axes)."""
+    n, dim = x.shape
+    out = np.zeros(n)
+    for i in prange(n):
+        if kind[i] != FLUID:
+            continue
+        s = 0.0
+        for k in range(dim):
+            d = min_image(x[i, k] + half_dt * v[i, k] - xref[i, k], period[k])
+            s += d * d
+        out[i] = s
+    return out.max() if n else 0.0
+
+
+@njit(cache=True, parallel=True, fastmath=FASTMATH)
+def _predict(x, v, rho, acc, drho, kind, dt, v_n, rho_n):
+    n, dim = x.shape
+    h = 0.5 * dt
+    for i in prange(n):
+        if kind[i] != FLUID:
+            continue
+        rho_n[i] = rho[i]
+        rho[i] += h * drho[i]
+        for k in range(dim):
+            v_n[i, k] = v[i, k]
+            x[i, k] += h * v[i, k]
+            v[i, k] += h * acc[i, k]
+
+
+@njit(cache=True, parallel=True, fastmath=FASTMATH)
+def _correct(x, v, rho, acc, drho, kind, dt, v_n, rho_n):
+    n, dim = x.shape
+    h = 0.5 * dt
+    for i in prange(n):
+        if kind[i] != FLUID:
+            continue
+        rho[i] = rho_n[i] + dt * drho[i]
+        for k in range(dim):
+            v[i, k] = v_n[i, k] + dt * acc[i, k]
+            x[i, k] += h * v[i, k]
+
+
+@njit(cache=True, parallel=True)
+def _fluid_maxima(v, acc, rho, mu, kind):
+    """max |v|, max |a| and min rho/mu over fluid particles (strict maths)."""
+    n, dim = v.shape
+    vm = np.zeros(n)
+    am = np.zeros(n)
+    rm = np.full(n, np.inf)
+    for i in prange(n):
+        if kind[i] != FLUID:
+            continue
+        s = 0.0
+        a = 0.0
+        for k in range(dim):
+            s += v[i, k] * v[i, k]
+            a += acc[i, k] * acc[i, k]
+        vm[i] = s
+        am[i] = a
+        if mu[i] > 0.0:
+            rm[i] = rho[i] / mu[i]
+    if n == 0:
+        return 0.0, 0.0, np.inf
+    return np.sqrt(vm.max()), np.sqrt(am.max()), rm.min()
+
+
+@dataclass
+class _Scratch:
+    """Per-particle work arrays, recomputed at every force evaluation (never persistent
+    state, so a cell sort between evaluations does not need to permute them)."""
+
+    n: int
+    dim: int
+    pr: np.ndarray = field(init=False)
+    V: np.ndarray = field(init=False)
+    meff: np.ndarray = field(init=False)
+    isf: np.ndarray = field(init=False)
+    vg: np.ndarray = field(init=False)
+    grad: np.ndarray = field(init=False)
+    ok: np.ndarray = field(init=False)
+    v_n: np.ndarray = field(init=False)
+    rho_n: np.ndarray = field(init=False)
+
+    def __post_init__(self):
+        n, d = self.n, self.dim
+        self.pr, self.V, self.meff, self.isf = (np.zeros(n) for _ in range(4))
+        self.vg, self.grad, self.v_n = (np.zeros((n, d)) for _ in range(3))
+        self.rho_n = np.zeros(n)
+        self.ok = np.ones(n, dtype=np.bool_)
+
+
+class FluidSolver:
+    """WCSPH delta-SPH fluid with Adami walls on a :class:`ParticleSet`.
+
+    Fluid particles have kind FLUID, wall particles kind WALL (fixed positions, prescribed
+    velocity ``v`` and acceleration ``acc``, fixed volume ``vol``).  Other kinds are ignored.
+
+    Parameters: ``particles`` (fields ``v, acc, drho, p, mu, f_fluid`` are added), support
+    radius ``R`` [m], domain box ``lo``/``hi`` and ``period`` (0 on open axes), ``params``.
+    """
+
+    def __init__(self, particles: ParticleSet, R: float, lo, hi, period=None,
+                 params: FluidParams | None = None, kernel: str = "wendland_c2"):
+        self.p = particles
+        self.params = params or FluidParams()
+        self.dim = particles.dim
+        self.R = float(R)
+        self.h = 0.5 * self.R
+        self.kkind = kernels.kernel_code(kernel)
+        self.sigma = kernels.kernel_sigma(self.kkind, self.dim, self.R)
+        self.lo = np.asarray(lo, dtype=np.float64)
+        self.hi = np.asarray(hi, dtype=np.float64)
+        self.period = np.zeros(self.dim) if period is None else np.asarray(period, np.float64)
+        g = np.zeros(self.dim)
+        gp = np.asarray(self.params.gravity, dtype=np.float64).reshape(-1)
+        g[: min(self.dim, gp.size)] = gp[: self.dim]
+        self.gravity = g
+        self.B = tait_B(self.params.rho0, self.params.c0, self.params.gamma)
+        add_fluid_fields(particles)
+        mu = particles.mu
+        mu[(particles.kind == FLUID) & (mu == 0.0)] = self.params.mu
+        self.t = 0.0
+        self.step_count = 0
+        self.nbrs = None
+        self.n_rebuilds = 0
+        self.wall = {"neighbors": 0.0, "forces": 0.0, "integrate": 0.0, "guards": 0.0}
+        self.last_fallbacks = 0
+        self._scratch = None
+        self._xref = None
+        if self.params.threads:
+            self.nthreads = self.params.threads
+        else:
+            self.nthreads = 1 if particles.n < SERIAL_BELOW else 0
+        with _threads(self.nthreads):
+            self.rebuild_neighbors()
+            self.evaluate()
+
+    # -- neighbours -----------------------------------------------------------------------
+    @property
+    def list_radius(self) -> float:
+        return self.R * (1.0 + self.params.skin)
+
+    def rebuild_neighbors(self) -> None:
+        """Wrap periodic positions, cell-sort every ``sort_every`` builds, rebuild the list."""
+        t0 = time.perf_counter()
+        x = self.p.x
+        for k in range(self.dim):
+            L = self.period[k]
+            if L > 0:
+                x[:, k] = self.lo[k] + np.mod(x[:, k] - self.lo[k], L)
+        if self.params.sort_every and self.n_rebuilds % self.params.sort_every == 0:
+            perm = cell_sort_permutation(x, self.list_radius, self.lo, self.hi, self.period)
+            self.p.reorder(perm)
+        self.nbrs = build_neighbor_list(self.p.x, self.list_radius, self.lo, self.hi,
+                                        self.period)
+        self._xref = self.p.x.copy()
+        self.n_rebuilds += 1
+        if self._scratch is None or self._scratch.n != self.p.n:
+            self._scratch = _Scratch(self.p.n, self.dim)
+        self.wall["neighbors"] += time.perf_counter() - t0
+
+    def _ensure_neighbors(self, dt: float) -> None:
+        if self.params.skin <= 0:
+            self.rebuild_neighbors()
+            return
+        t0 = time.perf_counter()
+        lim = 0.5 * self.params.skin * self.R
+        d2 = _max_disp_sq(self.p.x, self._xref, self.p.v, 0.5 * dt, self.p.kind, self.period)
+        self.wall["neighbors"] += time.perf_counter() - t0
+        if d2 > lim * lim:
+            self.rebuild_neighbors()
+
+    # -- forces ---------------------------------------------------------------------------
+    def body_force(self, t: float) -> np.ndarray:
+        """Body force per unit mass at time ``t`` (with the optional smooth ramp)."""
+        tr = self.params.gravity_ramp
+        if tr > 0 and t < tr:
+            return self.gravity * 0.5 * (1.0 - math.cos(math.pi * t / tr))
+        return self.gravity
+
+    def evaluate(self, t: float | None = None) -> None:
+        """Pressures, wall states, density gradient, accelerations and density rates at the
+        current positions (``t``: time of the evaluation, for the body-force ramp)."""
+        t0 = time.perf_counter()
+        p, s, pa, nl = self.p, self._scratch, self.params, self.nbrs
+        g = self.body_force(self.t if t is None else t)
+        passes.prepare_fluid(p.rho, p.m, p.v, p.kind, pa.rho0, self.B, pa.gamma, p.p, s.vg)
+        adami_wall_state(p.x, p.v, p.rho, p.p, p.acc, p.kind, nl.offsets, nl.indices, self.R,
+                         self.kkind, self.period, g, pa.rho0, self.B, pa.gamma, s.vg)
+        passes.prepare_all(p.rho, p.p, p.m, p.vol, p.kind, s.pr, s.V, s.meff, s.isf)
+        delta_coef = pa.delta * self.h * pa.c0
+        if delta_coef > 0:
+            passes.density_gradient(p.x, p.rho, s.V, p.kind, nl.offsets, nl.indices, self.R,
+                                    self.sigma, self.kkind, self.period, pa.cond_max, s.grad,
+                                    s.ok)
+            self.last_fallbacks = int(np.count_nonzero(~s.ok))
+        passes.fluid_forces(p.x, p.v, s.vg, p.rho, s.pr, s.V, s.meff, s.isf, p.mu, s.grad,
+                            p.kind, nl.offsets, nl.indices, self.R, self.sigma, self.kkind,
+                            self.period, g, pa.eps_visc * self.h * self.h,
+                            delta_coef, pa.alpha * self.h * pa.c0, p.acc, p.drho,
+                            p.f_fluid)
+        self.wall["forces"] += time.perf_counter() - t0
+
+    # -- time stepping --------------------------------------------------------------------
+    def dt_limits(self) -> dict[str, float]:
+        """Acoustic, viscous and force limits [s] (see the module docstring)."""
+        p, pa = self.p, self.params
+        with _threads(self.nthreads):
+            vmax, amax, rho_mu = _fluid_maxima(p.v, p.acc, p.rho, p.mu, p.kind)
+        lim = {"acoustic": pa.cfl * self.h / (pa.c0 + vmax)}
+        if np.isfinite(rho_mu):
+            lim["viscous"] = pa.visc_cfl * self.h * self.h * rho_mu
+        if amax > 0:
+            lim["force"] = pa.force_cfl * math.sqrt(self.h / amax)
+        return lim
+
+    def stable_dt(self) -> tuple[float, str]:
+        lim = self.dt_limits()
+        name = min(lim, key=lim.get)
+        return lim[name], name
+
+    def step(self, dt: float) -> None:
+        """One symplectic position-Verlet step of length ``dt`` (see the module docstring)."""
+        with _threads(self.nthreads):
+            self._step(dt)
+
+    def _step(self, dt: float) -> None:
+        self._ensure_neighbors(dt)
+        p, s = self.p, self._scratch
+        t0 = time.perf_counter()
+        _predict(p.x, p.v, p.rho, p.acc, p.drho, p.kind, dt, s.v_n, s.rho_n)
+        self.wall["integrate"] += time.perf_counter() - t0
+        self.evaluate(self.t + 0.5 * dt)
+        t0 = time.perf_counter()
+        _correct(p.x, p.v, p.rho, p.acc, p.drho, p.kind, dt, s.v_n, s.rho_n)
+        self.wall["integrate"] += time.perf_counter() - t0
+        self.t += dt
+        self.step_count += 1
+
+    def check(self) -> None:
+        """Stability guards (raise ``SimulationStopped`` with a clear message)."""
+        t0 = time.perf_counter()
+        with _threads(self.nthreads):
+            self._check()
+        self.wall["guards"] += time.perf_counter() - t0
+
+    def _check(self) -> None:
+        p, pa = self.p, self.params
+        check_fluid(p.x, p.v, p.rho, p.kind, self.lo, self.hi, self.period, pa.c0, pa.rho0,
+                    pa.max_speed_factor, pa.rho_ratio_band, self.step_count, self.t)
+
+    def run(self, t_end: float, callback=None, every: float | None = None,
+            max_steps: int | None = None) -> dict:
+        """Step to ``t_end`` with the adaptive dt; call ``callback(self)`` every ``every`` s.
+
+        Returns counts of the controlling dt limit and the step count.
+        """
+        counts: dict[str, int] = {}
+        next_cb = self.t + every if every else math.inf
+        while self.t < t_end * (1 - 1e-12):
+            if max_steps is not None and self.step_count >= max_steps:
+                break
+            dt, name = self.stable_dt()
+            dt = min(dt, t_end - self.t, max(next_cb - self.t, 1e-300))
+            self.step(dt)
+            self.check()
+            counts[name] = counts.get(name, 0) + 1
+            if callback is not None and self.t >= next_cb * (1 - 1e-12):
+                callback(self)
+                next_cb += every
+        return {"steps": self.step_count, "controlling_limit_counts": counts}
+
+    def total_fluid_force_on_walls(self) -> np.ndarray:
+        """Sum of ``f_fluid`` over wall particles [N] (the fluid's force on the walls)."""
+        return self.p.f_fluid.sum(axis=0)
+
+    def diagnostics(self) -> dict:
+        p = self.p
+        fl = p.kind == FLUID
+        return {
+            "fluid_particles": int(fl.sum()),
+            "steps": self.step_count,
+            "neighbor_rebuilds": self.n_rebuilds,
+            "renormalisation_fallbacks": self.last_fallbacks,
+            "max_speed": float(np.sqrt((p.v[fl] ** 2).sum(axis=1)).max()) if fl.any() else 0.0,
+            "rho_ratio_range": [float(p.rho[fl].min() / self.params.rho0),
+                                float(p.rho[fl].max() / self.params.rho0)] if fl.any() else [],
+            "wall_s": dict(self.wall),
+        }
+
+
+class FluidModule(PhysicsModule):
+    """The ``fluid`` physics module: a :class:`FluidSolver` driven by the simulation.
+
+    Reads ``scene.fluid`` (a :class:`FluidParams` or a record with the same attribute
+    names) when present.  The solver keeps its own Verlet neighbour list (radius R (1 +
+    skin)) and may cell-sort the particles when it rebuilds it.
+    """
+
+    name = "fluid"
+    moves_particles = True
+
+    def __init__(self, scene):
+        super().__init__(scene)
+        cfg = getattr(scene, "fluid", None)
+        if cfg is None or isinstance(cfg, FluidParams):
+            self.params = cfg or FluidParams()
+        else:
+            names = FluidParams.__dataclass_fields__
+            self.params = FluidParams(**{k: getattr(cfg, k) for k in names if hasattr(cfg, k)})
+        self.solver = None
+
+    def fields(self):
+        dim = self.scene.dim
+        return {k: (np.float64, dim if nc == "dim" else nc) for k, nc in FIELDS.items()}
+
+    def init(self, sim) -> None:
+        self.solver = FluidSolver(sim.particles, sim.R, sim.lo, sim.hi, sim.period,
+                                  self.params, kernel=sim.scene.sph.kernel)
+
+    def dt_limits(self, sim) -> dict[str, float]:
+        return self.solver.dt_limits()
+
+    def step(self, sim, dt: float) -> None:
+        self.solver.step(dt)
+        self.solver.check()
+
+    def diagnostics(self, sim) -> dict:
+        return self.solver.diagnostics()
+
+
+register_physics("fluid", "sphfem.fluid.wcsph:FluidModule")
