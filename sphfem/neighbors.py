@@ -153,34 +153,31 @@ def _make_grid(n, radius, lo, hi, period, cells_per_radius) -> _Grid:
 
 @njit(cache=True, parallel=True)
 def _cell_coords(x, origin, width, ncell, period):
-    """Padded cell coordinates ``cc`` (n, 3), linear row-major ids, and the positions
-    ``xw`` (3, n) wrapped into the box on periodic axes (zero on padded axes)."""
+    """Row-major cell id of every particle (last axis fastest) and the positions ``xw``
+    (3, n), wrapped into the box on periodic axes, zero on the padded leading axes."""
     n, dim = x.shape
     off = 3 - dim
-    cc = np.zeros((n, 3), dtype=np.int64)
     xw = np.zeros((3, n))
     cid = np.empty(n, dtype=np.int64)
     for i in prange(n):
-        for k in range(dim):
-            K = off + k
-            y = x[i, k] - origin[K]
-            L = period[K]
-            if L > 0.0:
-                y -= L * np.floor(y / L)
-                if y >= L:  # rounding of a tiny negative y
-                    y = 0.0
-                xw[K, i] = origin[K] + y
-            else:
-                xw[K, i] = x[i, k]
-            c = np.floor(y / width[K])
-            if c < 0.0:
-                c = 0.0
-            top = ncell[K] - 1
-            if c > top:
-                c = top
-            cc[i, K] = np.int64(c)
-        cid[i] = (cc[i, 0] * ncell[1] + cc[i, 1]) * ncell[2] + cc[i, 2]
-    return cc, xw, cid
+        c = 0
+        for K in range(3):
+            ck = 0
+            if K >= off:
+                y = x[i, K - off] - origin[K]
+                L = period[K]
+                if L > 0.0:
+                    y -= L * np.floor(y / L)
+                    if y >= L:  # rounding of a tiny negative y
+                        y = 0.0
+                    xw[K, i] = origin[K] + y
+                else:
+                    xw[K, i] = x[i, K - off]
+                f = min(max(np.floor(y / width[K]), 0.0), ncell[K] - 1.0)
+                ck = np.int64(f)
+            c = c * ncell[K] + ck
+        cid[i] = c
+    return xw, cid
 
 
 @njit(cache=True)
@@ -436,7 +433,7 @@ def build_neighbor_list(
         raise ValueError("too many particles for int32 neighbour indices")
 
     g = _make_grid(n, radius, lo, hi, period, cells_per_radius)
-    cc, xw, cid = _cell_coords(x, g.origin, g.width, g.ncell, g.period)
+    xw, cid = _cell_coords(x, g.origin, g.width, g.ncell, g.period)
     order, cell_start = _counting_sort(cid, int(np.prod(g.ncell)))
     xs = _gather_columns(xw, order)
     order32 = order.astype(np.int32)
@@ -472,6 +469,6 @@ def cell_sort_permutation(x, cell_size, lo, hi, period=None) -> np.ndarray:
     if n == 0:
         return np.zeros(0, dtype=np.int64)
     g = _make_grid(n, cell_size, lo, hi, period, 1)
-    _, _, cid = _cell_coords(x, g.origin, g.width, g.ncell, g.period)
+    _, cid = _cell_coords(x, g.origin, g.width, g.ncell, g.period)
     order, _ = _counting_sort(cid, int(np.prod(g.ncell)))
     return order
