@@ -5,5 +5,8 @@ load (thermal strain, tractions, sensor point forces, body force) and back-subst
 """
 
 from sphfem.fem.meshing import mesh_command, substrate_block, substrate_rect
+from sphfem.fem.output import FEMSeries
+from sphfem.fem.substrate import FEMResult, FEMSubstrate, load_mesh
 
-__all__ = ["mesh_command", "substrate_block", "substrate_rect"]
+__all__ = ["FEMResult", "FEMSeries", "FEMSubstrate", "load_mesh", "mesh_command",
+           "substrate_block", "substrate_rect"]
