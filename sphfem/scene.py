@@ -48,6 +48,7 @@ from sphfem.schema import (
     SceneError,
     Section,
     import_for,
+    key_text,
     known_modules,
     register_section,
     suggest,
@@ -317,7 +318,7 @@ def parse_scene(data, source: str = "<string>") -> Scene:
     core = [s.name for s in CORE]
     for key in data:
         if key not in SECTIONS:
-            ctx.error(str(key), "unknown section" + suggest(key, list(SECTIONS)))
+            ctx.error(key_text(key), "unknown section" + suggest(key, list(SECTIONS)))
 
     meta = validate_section(SCENE, data.get("scene"), ctx)
     ctx.dim = meta.dim

@@ -37,6 +37,7 @@ from __future__ import annotations
 import difflib
 import importlib
 import importlib.util
+import json
 import math
 import pkgutil
 import re
@@ -69,7 +70,7 @@ class SceneError(ValueError):
 
     def __init__(self, source: str, key: str, message: str):
         self.source = str(source)
-        self.key = key
+        self.key = str(key).encode("unicode_escape").decode("ascii")  # always one line
         self.message = " ".join(str(message).split())
         super().__init__(str(self))
 
@@ -474,7 +475,16 @@ def _num(x) -> str:
     return f"{x:g}" if isinstance(x, float) else str(x)
 
 
+def key_text(key) -> str:
+    """A key as TOML writes it: bare if it can be, else quoted with escapes."""
+    key = str(key)
+    if re.fullmatch(r"[A-Za-z0-9_-]+", key):
+        return key
+    return json.dumps(key, ensure_ascii=False)
+
+
 def _join(path: str, key: str) -> str:
+    key = key_text(key)
     return f"{path}.{key}" if path else key
 
 
@@ -596,7 +606,7 @@ def validate_table(section: Section, data, ctx: Context, path: str) -> Record:
     known = section.keys
     for k in data:
         if k not in known:
-            ctx.error(_join(path, str(k)), f"unknown key in [{_header(section)}]"
+            ctx.error(_join(path, k), f"unknown key in [{_header(section)}]"
                       + suggest(k, known))
     out: dict[str, Any] = {}
     conditional = []
@@ -670,9 +680,9 @@ def validate_section(section: Section, data, ctx: Context, path: str | None = No
         out = {}
         for name, item in data.items():
             if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_\-]*", str(name)):
-                ctx.error(_join(path, str(name)),
+                ctx.error(_join(path, name),
                           "names must start with a letter and use letters, digits, _ or -")
-            out[name] = validate_table(section, item, ctx, _join(path, str(name)))
+            out[name] = validate_table(section, item, ctx, _join(path, name))
         return FrozenDict(out)
     return validate_table(section, {} if data is None else data, ctx, path)
 
