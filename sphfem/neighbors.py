@@ -5,22 +5,28 @@ padded to three axes internally (leading axes of one cell), so the last real axi
 fastest-varying cell axis and the cells ``(a, b, c - s .. c + s)`` of a row are one
 contiguous block of the cell-sorted particle copy.
 
-Algorithm (CompactNSearch / PySPH ``LinkedListNNPS`` style):
+Algorithm (CompactNSearch / PySPH ``LinkedListNNPS`` style, cell size = radius):
 
-1. cell coordinates of every particle (periodic axes wrapped, others clamped to the grid);
-2. counting sort of the linear cell ids -> ``cell_start`` (exclusive cumsum) and ``order``;
-   positions are gathered into cell order so that candidate loops read contiguous memory;
-3. a parallel *count* pass over particles (``prange``, gather only) -> ``offsets``;
-4. a parallel *fill* pass writing each particle's own CSR segment -> ``indices``.
+1. cell ids of every particle (periodic axes wrapped into the box, others clamped to the
+   grid, so particles slightly outside ``[lo, hi]`` are fine);
+2. counting sort of the cell ids -> ``cell_start`` (exclusive cumsum) and ``order``;
+   positions are gathered into cell order, one contiguous row per axis;
+3. per cell (``prange`` over chunks of cells): the candidates of its 3^dim stencil are
+   gathered once into contiguous scratch arrays, with the periodic image shift applied and
+   pruned to those within ``radius`` of the cell's bounding box; every particle of the cell
+   then scans them with a branch-free, vectorised loop.  A *count* pass gives ``offsets``,
+   a *fill* pass writes each particle's own CSR segment (gather only, race free).
 
 Every particle's neighbours are returned sorted by index, so the list does not depend on
 the thread count.  Pairs at distance exactly ``radius`` are included (``r^2 <= R^2``, no
-square root).  Periodic axes use the minimum-image convention; this needs
-``radius < period / 2`` (checked), so that at most one image of a particle is a neighbour.
+square root, strict IEEE arithmetic).  Periodic axes use the minimum-image convention; this
+needs ``radius < period / 2`` (checked), so that at most one image of a particle is a
+neighbour.  Boxes only two cells across are fine: each (cell, image) pair is visited once.
 
-For cache locality, sort the particles once in a while with :func:`cell_sort_permutation`
-(``particles.reorder(perm)``); the search is correct for any order, but the sorted case is
-several times faster (contiguous candidate rows, and the per-particle sort is a no-op).
+For cache locality, sort the particles every few steps with :func:`cell_sort_permutation`
+(``particles.reorder(perm)``) using the same radius; the search is correct for any order,
+but on an unsorted set it is several times slower (scattered candidates, and every
+neighbour segment must be sorted).
 """
 
 from __future__ import annotations
@@ -212,13 +218,22 @@ def _gather_columns(xw, order):
 
 
 @njit(cache=True, inline="always")
-def _axis_span(c, s, nc, L):
-    """First and last unwrapped cell visited on one axis (clamped unless periodic)."""
+def _axis_parts(c, s, nc, L):
+    """Cells visited on one axis around cell ``c``: two unwrapped ranges ``[u0, u1]``,
+    ``[v0, v1]`` (the second possibly empty), ordered so that their wrapped cells ascend.
+
+    Open axes are clamped to the grid.  A periodic axis too short for ``2 s + 1`` distinct
+    cells visits every (cell, image) pair once, in one range, not in ascending order.
+    """
     if L > 0.0:
-        return c - s, c + s
-    a = c - s
-    b = c + s
-    return max(a, 0), min(b, nc - 1)
+        if 2 * s + 1 > nc:
+            return c - s, c + s, 0, -1
+        if c - s < 0:
+            return 0, c + s, c - s, -1
+        if c + s >= nc:
+            return nc, c + s, c - s, nc - 1
+        return c - s, c + s, 0, -1
+    return max(c - s, 0), min(c + s, nc - 1), 0, -1
 
 
 @njit(cache=True, inline="always")
@@ -255,23 +270,49 @@ def _max_candidates(cell_start, ncell, reach, period):
         if cell_start[c + 1] == cell_start[c]:
             continue
         c0, c1, c2 = _cell_xyz(c, ncell)
-        a_lo, a_hi = _axis_span(c0, reach[0], ncell[0], period[0])
-        b_lo, b_hi = _axis_span(c1, reach[1], ncell[1], period[1])
-        e_lo, e_hi = _axis_span(c2, reach[2], ncell[2], period[2])
+        A = _axis_parts(c0, reach[0], ncell[0], period[0])
+        B = _axis_parts(c1, reach[1], ncell[1], period[1])
+        E = _axis_parts(c2, reach[2], ncell[2], period[2])
         m = 0
-        for a in range(a_lo, a_hi + 1):
-            aa, _ = _image(a, ncell[0], period[0])
-            for b in range(b_lo, b_hi + 1):
-                bb, _ = _image(b, ncell[1], period[1])
-                row = (aa * ncell[1] + bb) * ncell[2]
-                e = e_lo
-                while e <= e_hi:
-                    ee, _ = _image(e, ncell[2], period[2])
-                    run = min(e_hi - e, ncell[2] - 1 - ee)
-                    m += cell_start[row + ee + run + 1] - cell_start[row + ee]
-                    e += run + 1
+        for ia in range(2):
+            for a in range(A[2 * ia], A[2 * ia + 1] + 1):
+                aa, _ = _image(a, ncell[0], period[0])
+                for ib in range(2):
+                    for b in range(B[2 * ib], B[2 * ib + 1] + 1):
+                        bb, _ = _image(b, ncell[1], period[1])
+                        row = (aa * ncell[1] + bb) * ncell[2]
+                        for ie in range(2):
+                            e = E[2 * ie]
+                            while e <= E[2 * ie + 1]:
+                                ee, _ = _image(e, ncell[2], period[2])
+                                run = min(E[2 * ie + 1] - e, ncell[2] - 1 - ee)
+                                m += cell_start[row + ee + run + 1] - cell_start[row + ee]
+                                e += run + 1
         best[c] = m
     return best.max() if ncells else 0
+
+
+@njit(cache=True, inline="always")
+def _gather_run(xs, order, ps, pe, sh0, sh1, sh2, bbox, r2max, cx, cj, m):
+    """Append the particles ``ps:pe`` (shifted by the image) within ``radius`` of the box."""
+    x0 = xs[0]
+    x1 = xs[1]
+    x2 = xs[2]
+    lo0, hi0, lo1, hi1, lo2, hi2 = bbox
+    for p in range(ps, pe):
+        y0 = x0[p] + sh0
+        y1 = x1[p] + sh1
+        y2 = x2[p] + sh2
+        d0 = max(lo0 - y0, 0.0, y0 - hi0)
+        d1 = max(lo1 - y1, 0.0, y1 - hi1)
+        d2 = max(lo2 - y2, 0.0, y2 - hi2)
+        q = np.uint64(m)
+        cx[0, q] = y0
+        cx[1, q] = y1
+        cx[2, q] = y2
+        cj[q] = order[p]
+        m += d0 * d0 + d1 * d1 + d2 * d2 <= r2max
+    return m
 
 
 @njit(cache=True, inline="always")
@@ -292,36 +333,30 @@ def _gather_candidates(c, xs, order, cell_start, ncell, reach, period, r2max, cx
         hi1 = max(hi1, x1[p])
         lo2 = min(lo2, x2[p])
         hi2 = max(hi2, x2[p])
+    bbox = (lo0, hi0, lo1, hi1, lo2, hi2)
     c0, c1, c2 = _cell_xyz(c, ncell)
-    a_lo, a_hi = _axis_span(c0, reach[0], ncell[0], period[0])
-    b_lo, b_hi = _axis_span(c1, reach[1], ncell[1], period[1])
-    e_lo, e_hi = _axis_span(c2, reach[2], ncell[2], period[2])
+    A = _axis_parts(c0, reach[0], ncell[0], period[0])
+    B = _axis_parts(c1, reach[1], ncell[1], period[1])
+    E = _axis_parts(c2, reach[2], ncell[2], period[2])
     m = 0
-    for a in range(a_lo, a_hi + 1):
-        aa, sh0 = _image(a, ncell[0], period[0])
-        for b in range(b_lo, b_hi + 1):
-            bb, sh1 = _image(b, ncell[1], period[1])
-            row = (aa * ncell[1] + bb) * ncell[2]
-            e = e_lo
-            while e <= e_hi:  # runs of consecutive last-axis cells with one image each
-                ee, sh2 = _image(e, ncell[2], period[2])
-                run = min(e_hi - e, ncell[2] - 1 - ee)
-                ps = np.uint64(cell_start[row + ee])
-                pe = np.uint64(cell_start[row + ee + run + 1])
-                for p in range(ps, pe):
-                    y0 = x0[p] + sh0
-                    y1 = x1[p] + sh1
-                    y2 = x2[p] + sh2
-                    d0 = max(lo0 - y0, 0.0, y0 - hi0)
-                    d1 = max(lo1 - y1, 0.0, y1 - hi1)
-                    d2 = max(lo2 - y2, 0.0, y2 - hi2)
-                    q = np.uint64(m)
-                    cx[0, q] = y0
-                    cx[1, q] = y1
-                    cx[2, q] = y2
-                    cj[q] = order[p]
-                    m += d0 * d0 + d1 * d1 + d2 * d2 <= r2max
-                e += run + 1
+    for ia in range(2):
+        for a in range(A[2 * ia], A[2 * ia + 1] + 1):
+            aa, sh0 = _image(a, ncell[0], period[0])
+            for ib in range(2):
+                for b in range(B[2 * ib], B[2 * ib + 1] + 1):
+                    bb, sh1 = _image(b, ncell[1], period[1])
+                    row = (aa * ncell[1] + bb) * ncell[2]
+                    for ie in range(2):
+                        e = E[2 * ie]
+                        while e <= E[2 * ie + 1]:  # runs of last-axis cells with one image
+                            ee, sh2 = _image(e, ncell[2], period[2])
+                            run = min(E[2 * ie + 1] - e, ncell[2] - 1 - ee)
+                            ps = np.uint64(cell_start[row + ee])
+                            pe = np.uint64(cell_start[row + ee + run + 1])
+                            m = _gather_run(
+                                xs, order, ps, pe, sh0, sh1, sh2, bbox, r2max, cx, cj, m
+                            )
+                            e += run + 1
     return m
 
 
