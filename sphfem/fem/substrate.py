@@ -100,7 +100,15 @@ def load_mesh(path) -> Mesh:
     keep = [i for i, b in enumerate(m.cells) if b.type != "vertex" or used[b.data].all()]
     cell_sets = {k: [v[i] for i in keep] for k, v in m.cell_sets.items()}
     mm = meshio.Mesh(points, cells, cell_sets=cell_sets)
-    mesh = from_meshio(mm)
+    # skfem warns "Failure to orient a boundary" for quad facets of hex meshes; the
+    # orientation only matters for facet normals, which no load here uses
+    skfem_log = logging.getLogger("skfem.io.meshio")
+    level = skfem_log.level
+    skfem_log.setLevel(logging.ERROR)
+    try:
+        mesh = from_meshio(mm)
+    finally:
+        skfem_log.setLevel(level)
     if type(mesh) not in {k[0] for k in _ELEMENTS}:
         raise ValueError(f"{path}: unsupported mesh type {type(mesh).__name__}")
     return mesh
@@ -314,7 +322,7 @@ class FEMSubstrate:
 
         # --- stiffness, once ------------------------------------------------------
         t1 = time.perf_counter()
-        K = forms.linear_elasticity(self.lam, self.mu)
+        K = forms.elasticity(self.lam, self.mu)
         if nthreads:
             K = type(K)(K.form, nthreads=nthreads)
         kbasis = self.basis
