@@ -30,7 +30,7 @@ import numpy as np
 from numba import njit, prange
 
 from sphfem.fluid.eos import tait_pressure
-from sphfem.kernels import kernel_dfdq
+from sphfem.kernels import WENDLAND_C2, kernel_dfdq
 from sphfem.neighbors import min_image
 from sphfem.particles import FLUID, WALL
 
@@ -70,6 +70,49 @@ def prepare_all(rho, p, m, vol, kind, pr, V, meff, isf):
             V[i] = 0.0
             meff[i] = 0.0
             isf[i] = 0.0
+
+
+@njit(cache=True, inline="always")
+def _F(d, R, fac2, kkind):
+    """F = -dW/dr / d for the support radius R, ``fac2 = sigma / R^2``.
+
+    Wendland C2: f'(q) = -20 q (1 - q)^3, so F = 20 sigma (1 - q)^3 / R^2 without a
+    division by d.
+    """
+    q = d / R
+    if kkind == WENDLAND_C2:
+        a = 1.0 - q
+        return fac2 * 20.0 * a * a * a
+    return -fac2 * kernel_dfdq(q, kkind) / q
+
+
+@njit(cache=True, parallel=True)
+def filter_wall_rows(offsets, indices, kind):
+    """CSR list in which rows of non-fluid particles keep only their fluid neighbours
+    (fluid rows are copied unchanged): wall rows then cost only what the wall needs."""
+    n = offsets.shape[0] - 1
+    counts = np.empty(n, dtype=np.int64)
+    for i in prange(n):
+        if kind[i] == FLUID:
+            counts[i] = offsets[i + 1] - offsets[i]
+        else:
+            c = 0
+            for jj in range(offsets[i], offsets[i + 1]):
+                c += kind[indices[jj]] == FLUID
+            counts[i] = c
+    new_off = np.zeros(n + 1, dtype=np.int64)
+    for i in range(n):
+        new_off[i + 1] = new_off[i] + counts[i]
+    out = np.empty(new_off[n], dtype=indices.dtype)
+    for i in prange(n):
+        k = new_off[i]
+        fl = kind[i] == FLUID
+        for jj in range(offsets[i], offsets[i + 1]):
+            j = indices[jj]
+            if fl or kind[j] == FLUID:
+                out[k] = j
+                k += 1
+    return new_off, out
 
 
 @njit(cache=True, inline="always")
@@ -146,7 +189,7 @@ def density_gradient(x, rho, V, kind, offsets, indices, R, sigma, kkind, period,
     """
     n, dim = x.shape
     R2 = R * R
-    fac = sigma / R
+    fac2 = sigma / (R * R)
     periodic = False
     for k in range(dim):
         periodic |= period[k] > 0.0
@@ -156,7 +199,12 @@ def density_gradient(x, rho, V, kind, offsets, indices, R, sigma, kkind, period,
                 grad[i, k] = 0.0
             ok[i] = True
             continue
-        M = np.zeros((3, 3))
+        m00 = 0.0
+        m01 = 0.0
+        m02 = 0.0
+        m11 = 0.0
+        m12 = 0.0
+        m22 = 0.0
         g0 = 0.0
         g1 = 0.0
         g2 = 0.0
@@ -167,22 +215,28 @@ def density_gradient(x, rho, V, kind, offsets, indices, R, sigma, kkind, period,
             d2 = r0 * r0 + r1 * r1 + r2 * r2
             if d2 >= R2 or d2 == 0.0:
                 continue
-            d = np.sqrt(d2)
-            s = V[j] * (-fac * kernel_dfdq(d / R, kkind) / d)  # V_j F
+            s = V[j] * _F(np.sqrt(d2), R, fac2, kkind)  # V_j F
             t = s * (rho[j] - ri)
             g0 += t * r0
             g1 += t * r1
             g2 += t * r2
-            M[0, 0] += s * r0 * r0
-            M[0, 1] += s * r0 * r1
-            M[0, 2] += s * r0 * r2
-            M[1, 1] += s * r1 * r1
-            M[1, 2] += s * r1 * r2
-            M[2, 2] += s * r2 * r2
-        M[1, 0] = M[0, 1]
-        M[2, 0] = M[0, 2]
-        M[2, 1] = M[1, 2]
-        Bi = np.zeros((3, 3))
+            m00 += s * r0 * r0
+            m01 += s * r0 * r1
+            m02 += s * r0 * r2
+            m11 += s * r1 * r1
+            m12 += s * r1 * r2
+            m22 += s * r2 * r2
+        M = np.empty((3, 3))
+        M[0, 0] = m00
+        M[0, 1] = m01
+        M[0, 2] = m02
+        M[1, 0] = m01
+        M[1, 1] = m11
+        M[1, 2] = m12
+        M[2, 0] = m02
+        M[2, 1] = m12
+        M[2, 2] = m22
+        Bi = np.empty((3, 3))
         good = _invert(M, dim, Bi, cond_max)
         ok[i] = good
         g = (g0, g1, g2)
@@ -196,113 +250,128 @@ def density_gradient(x, rho, V, kind, offsets, indices, R, sigma, kkind, period,
                 grad[i, p] = g[p]
 
 
+# columns of the packed per-particle rows read by the force pass (one or two cache lines
+# per neighbour instead of ~18 scattered arrays)
+_X, _V, _VG, _RHO, _PR, _VOL, _M, _ISF, _MU, _G = 0, 3, 6, 9, 10, 11, 12, 13, 14, 15
+NPACK = 18
+
+
+@njit(cache=True, parallel=True)
+def pack_rows(x, v, vg, rho, pr, V, meff, isf, mu, grad, P):
+    """Fill P (n, NPACK) with the per-particle quantities of the force pass (zero-padded)."""
+    n, dim = x.shape
+    for i in prange(n):
+        for k in range(3):
+            if k < dim:
+                P[i, _X + k] = x[i, k]
+                P[i, _V + k] = v[i, k]
+                P[i, _VG + k] = vg[i, k]
+                P[i, _G + k] = grad[i, k]
+            else:
+                P[i, _X + k] = 0.0
+                P[i, _V + k] = 0.0
+                P[i, _VG + k] = 0.0
+                P[i, _G + k] = 0.0
+        P[i, _RHO] = rho[i]
+        P[i, _PR] = pr[i]
+        P[i, _VOL] = V[i]
+        P[i, _M] = meff[i]
+        P[i, _ISF] = isf[i]
+        P[i, _MU] = mu[i]
+
+
+@njit(cache=True, inline="always")
+def _psep(P, i, j, period, periodic):
+    r0 = P[j, 0] - P[i, 0]
+    r1 = P[j, 1] - P[i, 1]
+    r2 = P[j, 2] - P[i, 2]
+    if periodic:
+        r0 = min_image(r0, period[0])
+        r1 = min_image(r1, period[1])
+        r2 = min_image(r2, period[2])
+    return r0, r1, r2
+
+
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
-def fluid_forces(x, v, vg, rho, pr, V, meff, isf, mu, grad, kind, offsets, indices,
-                 R, sigma, kkind, period, gravity, eps2, delta_coef, art_coef, acc, drho,
-                 f_wall):
+def fluid_forces(P, kind, offsets, indices, R, sigma, kkind, period, gravity, eps2, delta_coef,
+                 art_coef, acc, drho, f_wall):
     """Accelerations and density rates of fluid particles; fluid forces on wall particles.
 
-    ``eps2`` is the viscous regulariser (eps_visc h^2), ``delta_coef = delta h c0`` (0: no
-    diffusive term), ``art_coef = alpha h c0`` (0: no artificial viscosity; Monaghan 1992
-    in the always-on form of Marrone et al. 2011, symmetrised: pair acceleration
-    2 m_j alpha h c0 / (rho_i + rho_j) (u_ji . r) r F / (r^2 + eps2)).  Fluid rows of
-    ``acc`` (m/s^2) and ``drho`` (kg/m^3/s) and wall rows of
-    ``f_wall`` (N) are written; other rows are zeroed.
+    ``P`` holds the packed rows of :func:`pack_rows`.  ``eps2`` is the viscous regulariser
+    (eps_visc h^2), ``delta_coef = delta h c0`` (0: no diffusive term), ``art_coef = alpha h
+    c0`` (0: no artificial viscosity; Monaghan 1992 in the always-on form of Marrone et al.
+    2011, symmetrised: pair acceleration 2 m_j alpha h c0 / (rho_i + rho_j) (u_ji . r) r F /
+    (r^2 + eps2)).  Fluid rows of ``acc`` (m/s^2) and ``drho`` (kg/m^3/s) and wall rows of
+    ``f_wall`` (N) are written; other rows are zeroed (a wall's ``acc``, its prescribed
+    acceleration, is left alone).
     """
-    n, dim = x.shape
+    n = P.shape[0]
+    dim = acc.shape[1]
     R2 = R * R
-    fac = sigma / R
+    fac2 = sigma / (R * R)
     periodic = False
+    pp = np.zeros(3)
     for k in range(dim):
         periodic |= period[k] > 0.0
+        pp[k] = period[k]
     use_delta = delta_coef != 0.0
+    use_art = art_coef != 0.0
     for i in prange(n):
         ki = kind[i]
-        a0 = 0.0
-        a1 = 0.0
-        a2 = 0.0
-        cont = 0.0
-        diff = 0.0
         if ki != FLUID and ki != WALL:
             for k in range(dim):
                 acc[i, k] = 0.0
                 f_wall[i, k] = 0.0
             drho[i] = 0.0
             continue
-        fl = ki == FLUID
-        ri = rho[i]
-        pri = pr[i]
-        mui = mu[i]
-        vi0 = v[i, 0]
-        vi1 = v[i, 1] if dim > 1 else 0.0
-        vi2 = v[i, 2] if dim > 2 else 0.0
-        if fl:
-            wi0 = vi0
-            wi1 = vi1
-            wi2 = vi2
-        else:  # a wall row sees the fluid with its ghost velocity
-            wi0 = vg[i, 0]
-            wi1 = vg[i, 1] if dim > 1 else 0.0
-            wi2 = vg[i, 2] if dim > 2 else 0.0
-        gi0 = grad[i, 0]
-        gi1 = grad[i, 1] if dim > 1 else 0.0
-        gi2 = grad[i, 2] if dim > 2 else 0.0
-        for jj in range(offsets[i], offsets[i + 1]):
-            j = indices[jj]
-            fj = isf[j]
-            if not fl and fj == 0.0:
-                continue  # wall-wall
-            mj = meff[j]
-            if mj == 0.0:
-                continue  # a particle kind that does not interact with the fluid
-            r0, r1, r2 = _sep(x, i, j, dim, period, periodic)
-            d2 = r0 * r0 + r1 * r1 + r2 * r2
-            if d2 >= R2 or d2 == 0.0:
-                continue
-            d = np.sqrt(d2)
-            F = -fac * kernel_dfdq(d / R, kkind) / d
-            rj = rho[j]
-            # pressure, eq. 2.85: -m_j (p_i/rho_i^2 + p_j/rho_j^2) grad_i W
-            cp = -mj * (pri + pr[j]) * F
-            # viscosity, eq. 2.86: wall neighbours take the fluid's mu
-            if fl:
-                muj = fj * mu[j] + (1.0 - fj) * mui
-            else:
-                muj = mu[j]
-                mui = muj
-            rs = ri + rj
-            cv = mj * 4.0 * (mui + muj) / (rs * rs) * F * d2 / (d2 + eps2)
-            if fl:
-                u0 = vg[j, 0] - vi0
-                u1 = (vg[j, 1] - vi1) if dim > 1 else 0.0
-                u2 = (vg[j, 2] - vi2) if dim > 2 else 0.0
-            else:
-                u0 = v[j, 0] - wi0
-                u1 = (v[j, 1] - wi1) if dim > 1 else 0.0
-                u2 = (v[j, 2] - wi2) if dim > 2 else 0.0
-            if art_coef != 0.0:
-                cp += 2.0 * mj * art_coef / rs * F * (u0 * r0 + u1 * r1 + u2 * r2) / (d2 + eps2)
-            a0 += cp * r0 + cv * u0
-            a1 += cp * r1 + cv * u1
-            a2 += cp * r2 + cv * u2
-            if fl:
+        a0 = 0.0
+        a1 = 0.0
+        a2 = 0.0
+        cont = 0.0
+        diff = 0.0
+        ri = P[i, _RHO]
+        pri = P[i, _PR]
+        if ki == FLUID:
+            mui = P[i, _MU]
+            vi0 = P[i, _V]
+            vi1 = P[i, _V + 1]
+            vi2 = P[i, _V + 2]
+            gi0 = P[i, _G]
+            gi1 = P[i, _G + 1]
+            gi2 = P[i, _G + 2]
+            for jj in range(offsets[i], offsets[i + 1]):
+                j = indices[jj]
+                mj = P[j, _M]
+                r0, r1, r2 = _psep(P, i, j, pp, periodic)
+                d2 = r0 * r0 + r1 * r1 + r2 * r2
+                if d2 >= R2 or d2 == 0.0 or mj == 0.0:
+                    continue
+                F = _F(np.sqrt(d2), R, fac2, kkind)
+                rj = P[j, _RHO]
+                fj = P[j, _ISF]
+                # pressure, eq. 2.85: -m_j (p_i/rho_i^2 + p_j/rho_j^2) grad_i W
+                cp = -mj * (pri + P[j, _PR]) * F
+                # viscosity, eq. 2.86 (a wall neighbour takes the fluid's mu, ghost velocity)
+                muj = fj * P[j, _MU] + (1.0 - fj) * mui
+                rs = ri + rj
+                ie = 1.0 / (d2 + eps2)
+                cv = mj * 4.0 * (mui + muj) / (rs * rs) * F * d2 * ie
+                u0 = P[j, _VG] - vi0
+                u1 = P[j, _VG + 1] - vi1
+                u2 = P[j, _VG + 2] - vi2
+                if use_art:
+                    cp += 2.0 * mj * art_coef / rs * F * (u0 * r0 + u1 * r1 + u2 * r2) * ie
+                a0 += cp * r0 + cv * u0
+                a1 += cp * r1 + cv * u1
+                a2 += cp * r2 + cv * u2
                 # continuity, eq. 2.87: rho_i sum V_j (v_i - v_j) . grad_i W (wall: its own v)
-                vr = -(v[j, 0] - vi0) * r0
-                if dim > 1:
-                    vr -= (v[j, 1] - vi1) * r1
-                if dim > 2:
-                    vr -= (v[j, 2] - vi2) * r2
-                VF = V[j] * F
-                cont += VF * vr
-                if use_delta:
-                    gs = (gi0 + grad[j, 0]) * r0
-                    if dim > 1:
-                        gs += (gi1 + grad[j, 1]) * r1
-                    if dim > 2:
-                        gs += (gi2 + grad[j, 2]) * r2
-                    psi = (rj - ri) - 0.5 * gs
-                    diff += fj * psi * VF
-        if fl:
+                VF = P[j, _VOL] * F
+                cont -= VF * ((P[j, _V] - vi0) * r0 + (P[j, _V + 1] - vi1) * r1
+                              + (P[j, _V + 2] - vi2) * r2)
+                if use_delta:  # eqs. 2.88-2.89, fluid-fluid pairs
+                    gs = ((gi0 + P[j, _G]) * r0 + (gi1 + P[j, _G + 1]) * r1
+                          + (gi2 + P[j, _G + 2]) * r2)
+                    diff += fj * ((rj - ri) - 0.5 * gs) * VF
             acc[i, 0] = a0 + gravity[0]
             if dim > 1:
                 acc[i, 1] = a1 + gravity[1]
@@ -311,11 +380,36 @@ def fluid_forces(x, v, vg, rho, pr, V, meff, isf, mu, grad, kind, offsets, indic
             drho[i] = ri * cont + delta_coef * 2.0 * diff
             for k in range(dim):
                 f_wall[i, k] = 0.0
-        else:
-            mi = meff[i]
+        else:  # wall row: the same pair terms with i and j swapped (rows hold fluid only)
+            wi0 = P[i, _VG]
+            wi1 = P[i, _VG + 1]
+            wi2 = P[i, _VG + 2]
+            for jj in range(offsets[i], offsets[i + 1]):
+                j = indices[jj]
+                if P[j, _ISF] == 0.0:
+                    continue
+                mj = P[j, _M]
+                r0, r1, r2 = _psep(P, i, j, pp, periodic)
+                d2 = r0 * r0 + r1 * r1 + r2 * r2
+                if d2 >= R2 or d2 == 0.0:
+                    continue
+                F = _F(np.sqrt(d2), R, fac2, kkind)
+                rs = ri + P[j, _RHO]
+                cp = -mj * (pri + P[j, _PR]) * F
+                ie = 1.0 / (d2 + eps2)
+                cv = mj * 8.0 * P[j, _MU] / (rs * rs) * F * d2 * ie
+                u0 = P[j, _V] - wi0
+                u1 = P[j, _V + 1] - wi1
+                u2 = P[j, _V + 2] - wi2
+                if use_art:
+                    cp += 2.0 * mj * art_coef / rs * F * (u0 * r0 + u1 * r1 + u2 * r2) * ie
+                a0 += cp * r0 + cv * u0
+                a1 += cp * r1 + cv * u1
+                a2 += cp * r2 + cv * u2
+            mi = P[i, _M]
             f_wall[i, 0] = mi * a0
             if dim > 1:
                 f_wall[i, 1] = mi * a1
             if dim > 2:
                 f_wall[i, 2] = mi * a2
-            drho[i] = 0.0  # a wall's acc (prescribed acceleration) is left alone
+            drho[i] = 0.0

@@ -43,26 +43,36 @@ def adami_wall_state(x, v, rho, p, acc, kind, offsets, indices, R, kkind, period
             continue
         sw = 0.0
         sp = 0.0
-        srx = np.zeros(3)
-        sv = np.zeros(3)
+        sr0 = 0.0
+        sr1 = 0.0
+        sr2 = 0.0
+        sv0 = 0.0
+        sv1 = 0.0
+        sv2 = 0.0
         for jj in range(offsets[i], offsets[i + 1]):
             j = indices[jj]
             if kind[j] != FLUID:
                 continue
-            d2 = 0.0
-            r = np.zeros(3)
-            for k in range(dim):
-                dk = min_image(x[i, k] - x[j, k], period[k])  # x_w - x_f
-                r[k] = dk
-                d2 += dk * dk
+            r0 = min_image(x[i, 0] - x[j, 0], period[0])  # x_w - x_f
+            r1 = min_image(x[i, 1] - x[j, 1], period[1]) if dim > 1 else 0.0
+            r2 = min_image(x[i, 2] - x[j, 2], period[2]) if dim > 2 else 0.0
+            d2 = r0 * r0 + r1 * r1 + r2 * r2
             if d2 >= R2:
                 continue
             w = kernel_f(np.sqrt(d2) / R, kkind)
             sw += w
             sp += p[j] * w
-            for k in range(dim):
-                srx[k] += rho[j] * r[k] * w
-                sv[k] += v[j, k] * w
+            rw = rho[j] * w
+            sr0 += rw * r0
+            sr1 += rw * r1
+            sr2 += rw * r2
+            sv0 += v[j, 0] * w
+            if dim > 1:
+                sv1 += v[j, 1] * w
+            if dim > 2:
+                sv2 += v[j, 2] * w
+        srx = (sr0, sr1, sr2)
+        sv = (sv0, sv1, sv2)
         if sw > 0.0:
             hyd = 0.0
             for k in range(dim):

@@ -46,7 +46,12 @@ from sphfem.fluid import passes
 from sphfem.fluid.eos import tait_B
 from sphfem.fluid.guards import check_fluid
 from sphfem.fluid.walls_adami2012 import adami_wall_state
-from sphfem.neighbors import build_neighbor_list, cell_sort_permutation, min_image
+from sphfem.neighbors import (
+    NeighborList,
+    build_neighbor_list,
+    cell_sort_permutation,
+    min_image,
+)
 from sphfem.particles import FLUID, ParticleSet
 from sphfem.physics import PhysicsModule, register_physics
 
@@ -225,12 +230,14 @@ class _Scratch:
     ok: np.ndarray = field(init=False)
     v_n: np.ndarray = field(init=False)
     rho_n: np.ndarray = field(init=False)
+    P: np.ndarray = field(init=False)
 
     def __post_init__(self):
         n, d = self.n, self.dim
         self.pr, self.V, self.meff, self.isf = (np.zeros(n) for _ in range(4))
         self.vg, self.grad, self.v_n = (np.zeros((n, d)) for _ in range(3))
         self.rho_n = np.zeros(n)
+        self.P = np.zeros((n, passes.NPACK))
         self.ok = np.ones(n, dtype=np.bool_)
 
 
@@ -298,6 +305,9 @@ class FluidSolver:
             self.p.reorder(perm)
         self.nbrs = build_neighbor_list(self.p.x, self.list_radius, self.lo, self.hi,
                                         self.period)
+        # rows of wall particles keep only fluid neighbours (deep walls get empty rows)
+        off, idx = passes.filter_wall_rows(self.nbrs.offsets, self.nbrs.indices, self.p.kind)
+        self.nbrs = NeighborList(off, idx, self.nbrs.radius, self.nbrs.period)
         self._xref = self.p.x.copy()
         self.n_rebuilds += 1
         if self._scratch is None or self._scratch.n != self.p.n:
@@ -339,11 +349,10 @@ class FluidSolver:
                                     self.sigma, self.kkind, self.period, pa.cond_max, s.grad,
                                     s.ok)
             self.last_fallbacks = int(np.count_nonzero(~s.ok))
-        passes.fluid_forces(p.x, p.v, s.vg, p.rho, s.pr, s.V, s.meff, s.isf, p.mu, s.grad,
-                            p.kind, nl.offsets, nl.indices, self.R, self.sigma, self.kkind,
-                            self.period, g, pa.eps_visc * self.h * self.h,
-                            delta_coef, pa.alpha * self.h * pa.c0, p.acc, p.drho,
-                            p.f_fluid)
+        passes.pack_rows(p.x, p.v, s.vg, p.rho, s.pr, s.V, s.meff, s.isf, p.mu, s.grad, s.P)
+        passes.fluid_forces(s.P, p.kind, nl.offsets, nl.indices, self.R, self.sigma,
+                            self.kkind, self.period, g, pa.eps_visc * self.h * self.h,
+                            delta_coef, pa.alpha * self.h * pa.c0, p.acc, p.drho, p.f_fluid)
         self.wall["forces"] += time.perf_counter() - t0
 
     # -- time stepping --------------------------------------------------------------------

@@ -232,7 +232,8 @@ def dambreak_case(quick: bool = False) -> CaseResult:
         "koshizuka_oka": Criterion("relative L2 distance to Koshizuka & Oka (finest)",
                                    runs[-1].error_l2, 0.15),
     }
-    notes = ["a = 0.146 m, c0 = 10 sqrt(2 g a), mu = 1e-3 Pa s, delta = 0.1; Z = (max x of "
+    notes = ["a = 0.146 m, c0 = 10 sqrt(2 g a), mu = 1e-3 Pa s, delta = 0.1, alpha = 0.02; "
+             "Z = (max x of "
              "fluid + dx/2)/a, T = t sqrt(2g/a); 'err L2' is the relative distance to "
              "Koshizuka & Oka (1996) at their sample times; experimental fronts lag the "
              "inviscid computation at early times (gate removal, bottom friction).",
