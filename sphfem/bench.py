@@ -10,7 +10,9 @@ simulation does every few steps), and times, after a warm-up call that compiles:
 * ``pairs_per_s``: pairs / density_s, the pair-interaction rate of the density pass;
 * ``particle_steps_per_s``: n / (build_s + density_s), a "step" being one neighbour build
   and one density pass;
-* ``search_share``: build_s / (build_s + density_s).
+* ``search_share``: build_s / (build_s + density_s);
+* ``build_cpu_s``, ``density_cpu_s``: minimum process CPU seconds (all threads), to judge
+  contention on a shared machine.
 
 Run ``python -m sphfem.bench neighbors [--json FILE] [--quick]`` or ``sphfem bench NAME``.
 """
@@ -55,6 +57,7 @@ def machine_info() -> dict:
         "numba_max_threads": numba.config.NUMBA_NUM_THREADS,
         "threading_layer": _threading_layer(),
         "date": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+        "load_average": list(os.getloadavg()) if hasattr(os, "getloadavg") else None,
     }
 
 
@@ -73,14 +76,22 @@ def lattice_block(n_target: int, dx: float = 1.0) -> np.ndarray:
     return np.ascontiguousarray(x)
 
 
-def _best(fn, repeats: int) -> tuple[float, object]:
+def _best(fn, repeats: int) -> tuple[float, float, object]:
+    """Minimum wall seconds and minimum process CPU seconds over ``repeats`` calls.
+
+    On a shared machine the CPU time (all threads) shows contention: for t threads,
+    ``cpu / t`` well below the wall time means the threads were waiting for a core.
+    """
     best = np.inf
+    best_cpu = np.inf
     out = None
     for _ in range(repeats):
+        c0 = time.process_time()
         t0 = time.perf_counter()
         out = fn()
         best = min(best, time.perf_counter() - t0)
-    return best, out
+        best_cpu = min(best_cpu, time.process_time() - c0)
+    return best, best_cpu, out
 
 
 def _one_case(n_target: int, nthreads: int, repeats: int, cells_per_radius: int) -> dict:
@@ -106,13 +117,13 @@ def _one_case(n_target: int, nthreads: int, repeats: int, cells_per_radius: int)
         return build_neighbor_list(x, R, lo, hi, period, cells_per_radius=cells_per_radius)
 
     build()  # warm-up (compile / load cache, first-touch of memory)
-    build_s, nl = _best(build, repeats)
+    build_s, build_cpu_s, nl = _best(build, repeats)
 
     def dens():
         return summation_density(x, m, nl.offsets, nl.indices, R, sigma, WENDLAND_C2, period)
 
     dens()
-    density_s, rho = _best(dens, repeats)
+    density_s, density_cpu_s, rho = _best(dens, repeats)
     interior = np.all((x > lo + R) & (x < hi - R), axis=1)
     rho_err = float(np.max(np.abs(rho[interior] - 1.0))) if interior.any() else float("nan")
     return {
@@ -122,10 +133,12 @@ def _one_case(n_target: int, nthreads: int, repeats: int, cells_per_radius: int)
         "cells_per_radius": int(cells_per_radius),
         "sort_s": sort_s,
         "build_s": build_s,
+        "build_cpu_s": build_cpu_s,
         "pairs": nl.n_pairs,
         "pairs_per_particle": nl.n_pairs / n,
         "build_pairs_per_s": nl.n_pairs / build_s,
         "density_s": density_s,
+        "density_cpu_s": density_cpu_s,
         "pairs_per_s": nl.n_pairs / density_s,
         "particle_steps_per_s": n / (build_s + density_s),
         "search_share": build_s / (build_s + density_s),
@@ -182,17 +195,19 @@ def format_table(result: dict) -> str:
     mi = result["machine"]
     head = (
         f"{result['benchmark']}: {result['setup']}\n"
-        f"cpu: {mi['cpu']} ({mi['cores']} cores), numba {mi['numba']}, {mi['date']}\n"
+        f"cpu: {mi['cpu']} ({mi['cores']} cores), numba {mi['numba']}, {mi['date']}, "
+        f"load average {mi['load_average']}\n"
     )
     cols = (
-        f"{'n':>9} {'thr':>3} {'build s':>9} {'pairs':>11} {'build pairs/s':>13} "
-        f"{'density s':>9} {'pairs/s':>9} {'particle-steps/s':>16} {'search %':>8}"
+        f"{'n':>9} {'thr':>3} {'build s':>8} {'(cpu s)':>8} {'pairs':>11} {'build pairs/s':>13} "
+        f"{'density s':>9} {'(cpu s)':>8} {'pairs/s':>9} {'particle-steps/s':>16} {'search %':>8}"
     )
     rows = [head + cols, "-" * len(cols)]
     for c in result["cases"]:
         rows.append(
-            f"{c['n']:>9} {c['threads']:>3} {c['build_s']:>9.4f} {c['pairs']:>11} "
-            f"{c['build_pairs_per_s']:>13.3e} {c['density_s']:>9.4f} {c['pairs_per_s']:>9.3e} "
+            f"{c['n']:>9} {c['threads']:>3} {c['build_s']:>8.4f} {c['build_cpu_s']:>8.4f} "
+            f"{c['pairs']:>11} {c['build_pairs_per_s']:>13.3e} {c['density_s']:>9.4f} "
+            f"{c['density_cpu_s']:>8.4f} {c['pairs_per_s']:>9.3e} "
             f"{c['particle_steps_per_s']:>16.3e} {100 * c['search_share']:>8.1f}"
         )
     return "\n".join(rows)
