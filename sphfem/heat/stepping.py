@@ -34,7 +34,8 @@ def apply_ghost_rules(T, gi, gt, gs, tw, antisymmetric):
             T[gi[q]] = T[gs[q]]
 
 
-def _stage_py(T, g, offsets, indices, inv_rc, active, vol, g_out, rate):
+@njit(cache=True, parallel=True)
+def _stage_parallel(T, g, offsets, indices, inv_rc, active, vol, g_out, rate):
     """rate_i = sum_j g_ij (T_j - T_i) / (rho c)_i on active rows (0 elsewhere); returns
     the boundary heat rate sum_a V_a sum_j g_out_aj (T_j - T_a)."""
     n = offsets.shape[0] - 1
@@ -55,11 +56,31 @@ def _stage_py(T, g, offsets, indices, inv_rc, active, vol, g_out, rate):
     return qb.sum()
 
 
+@njit(cache=True)
+def _stage_serial(T, g, offsets, indices, inv_rc, active, vol, g_out, rate):
+    """Serial twin of :func:`_stage_parallel` (a separate function: numba's on-disk cache
+    does not tell two compilations of one function with different ``parallel`` apart)."""
+    n = offsets.shape[0] - 1
+    qb = 0.0
+    for i in range(n):
+        if not active[i]:
+            rate[i] = 0.0
+            continue
+        acc = 0.0
+        accb = 0.0
+        ti = T[i]
+        for jj in range(offsets[i], offsets[i + 1]):
+            d = T[indices[jj]] - ti
+            acc += g[jj] * d
+            accb += g_out[jj] * d
+        rate[i] = acc * inv_rc[i]
+        qb += vol[i] * accb
+    return qb
+
+
 #: below this many particles the threaded stage costs more than it saves (thread start-up
-#: per call is tens of microseconds, more on a loaded machine)
+#: per call is tens of microseconds, far more on a loaded machine)
 PARALLEL_MIN = 20000
-_stage_serial = njit(cache=True)(_stage_py)
-_stage_parallel = njit(cache=True, parallel=True)(_stage_py)
 
 
 @njit(cache=True)
