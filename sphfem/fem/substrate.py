@@ -236,7 +236,7 @@ class FEMResult:
         for k in range(b.Nbfun):
             phi = b.elem.gbasis(b.mapping, pts, k, tind=cells)[0]
             coef = self.dofs[b.element_dofs[k, cells]]
-            u += phi.value[..., 0] * coef
+            u += np.asarray(phi)[..., 0] * coef
             grad += phi.grad[..., 0] * coef
         dT = s._dT_at(self.dT_spec, X)
         S = forms.thermo_elastic_stress(s.lam, s.mu, s.alpha, grad, dT)
@@ -422,14 +422,14 @@ class FEMSubstrate:
         if spec is None:
             return 0.0
         if callable(spec):
-            return np.asarray(spec(self.basis.global_coordinates().value), float)
+            return np.asarray(spec(np.asarray(self.basis.global_coordinates())), float)
         a = np.asarray(spec, float)
         if a.ndim == 0:
             return float(a)
         if a.shape == (self.mesh.nvertices,):
-            return self.vbasis.interpolate(a).value
+            return np.asarray(self.vbasis.interpolate(a))
         if a.shape == (self.sbasis.N,):
-            return self.sbasis.interpolate(a).value
+            return np.asarray(self.sbasis.interpolate(a))
         raise ValueError(f"dT: expected a scalar, a callable, or an array of length "
                          f"{self.mesh.nvertices} (vertices) or {self.sbasis.N} (scalar "
                          f"{self.element} dofs); got shape {a.shape}")
@@ -450,7 +450,7 @@ class FEMSubstrate:
         cells, pts = self._locate(X)
         out = np.zeros(n)
         for k in range(b.Nbfun):
-            out += b.elem.gbasis(b.mapping, pts, k, tind=cells)[0].value[..., 0] * \
+            out += np.asarray(b.elem.gbasis(b.mapping, pts, k, tind=cells)[0])[..., 0] * \
                 a[b.element_dofs[k, cells]]
         return out
 
@@ -525,7 +525,7 @@ class FEMSubstrate:
         n = X.shape[1]
         rows, cols, vals = [], [], []
         for k in range(b.Nbfun):
-            v = b.elem.gbasis(b.mapping, pts, k, tind=cells)[0].value[..., 0]  # (dim, n)
+            v = np.asarray(b.elem.gbasis(b.mapping, pts, k, tind=cells)[0])[..., 0]  # (dim, n)
             for c in range(self.dim):
                 nz = v[c] != 0
                 rows.append(c * n + np.nonzero(nz)[0])
