@@ -14,8 +14,9 @@ Algorithm (CompactNSearch / PySPH ``LinkedListNNPS`` style, cell size = radius):
 3. per cell (``prange`` over chunks of cells): the candidates of its 3^dim stencil are
    gathered once into contiguous scratch arrays, with the periodic image shift applied and
    pruned to those within ``radius`` of the cell's bounding box; every particle of the cell
-   then scans them with a branch-free, vectorised loop.  A *count* pass gives ``offsets``,
-   a *fill* pass writes each particle's own CSR segment (gather only, race free).
+   then scans them with a vectorised loop.  A *count* pass gives ``offsets``; a *fill*
+   pass computes a 0/1 hit mask (vectorised), compacts it 8 candidates at a time over the
+   set bits only, and writes each particle's own CSR segment (gather only, race free).
 
 Every particle's neighbours are returned sorted by index, so the list does not depend on
 the thread count.  Pairs at distance exactly ``radius`` are included (``r^2 <= R^2``, no
@@ -31,10 +32,12 @@ neighbour segment must be sorted).
 
 from __future__ import annotations
 
+import sys
 from dataclasses import dataclass
 
 import numpy as np
 from numba import njit, prange
+from numba.cpython.unsafe.numbers import trailing_zeros
 
 FASTMATH = {"reassoc", "contract", "arcp", "afn"}
 
@@ -317,7 +320,9 @@ def _gather_run(xs, order, ps, pe, sh0, sh1, sh2, bbox, r2max, cx, cj, m):
 
 @njit(cache=True, inline="always")
 def _gather_candidates(c, xs, order, cell_start, ncell, reach, period, r2max, cx, cj):
-    """Candidates of cell ``c`` (positions with periodic image shift, ids) -> count."""
+    """Gather the candidates of cell ``c`` into ``cx`` (positions, periodic image shift
+    applied) and ``cj`` (ids).  Returns their number, the index of the cell's own first
+    particle among them (its particles follow contiguously), and whether ``cj`` ascends."""
     x0 = xs[0]
     x1 = xs[1]
     x2 = xs[2]
@@ -334,6 +339,8 @@ def _gather_candidates(c, xs, order, cell_start, ncell, reach, period, r2max, cx
         lo2 = min(lo2, x2[p])
         hi2 = max(hi2, x2[p])
     bbox = (lo0, hi0, lo1, hi1, lo2, hi2)
+    p0u = np.uint64(p0)
+    q_own = 0
     c0, c1, c2 = _cell_xyz(c, ncell)
     A = _axis_parts(c0, reach[0], ncell[0], period[0])
     B = _axis_parts(c1, reach[1], ncell[1], period[1])
@@ -353,11 +360,49 @@ def _gather_candidates(c, xs, order, cell_start, ncell, reach, period, r2max, cx
                             run = min(E[2 * ie + 1] - e, ncell[2] - 1 - ee)
                             ps = np.uint64(cell_start[row + ee])
                             pe = np.uint64(cell_start[row + ee + run + 1])
+                            own = (
+                                aa == c0
+                                and bb == c1
+                                and ee <= c2 <= ee + run
+                                and sh0 == 0.0
+                                and sh1 == 0.0
+                                and sh2 == 0.0
+                            )
+                            if own:  # the cell itself: all kept, remember where it starts
+                                m = _gather_run(
+                                    xs, order, ps, p0u, sh0, sh1, sh2, bbox, r2max, cx, cj, m
+                                )
+                                q_own = m
+                                ps = p0u
                             m = _gather_run(
                                 xs, order, ps, pe, sh0, sh1, sh2, bbox, r2max, cx, cj, m
                             )
                             e += run + 1
-    return m
+    ascending = True
+    for q in range(1, m):
+        ascending &= cj[q] > cj[q - 1]
+    return m, q_own, ascending
+
+
+@njit(cache=True, inline="always")
+def _compact(hit8, cj, m, buf):
+    """``buf[:k] = cj[hit]`` for a 0/1 byte mask ``hit`` viewed as 64-bit words ``hit8``.
+
+    A multiply gathers the eight bytes of a word into an 8-bit mask (byte t -> bit t); the
+    loop then visits only the set bits (trailing-zero count), so the cost is per hit.
+    """
+    k = np.uint64(0)
+    for w in range(np.uint64((m + 7) // 8)):
+        word = hit8[w]
+        if word == 0:
+            continue
+        bits = (word * np.uint64(0x0102040810204080)) >> np.uint64(56)
+        q0 = np.uint64(8) * w
+        while bits:
+            buf[k] = cj[q0 + np.uint64(trailing_zeros(bits))]
+            k += np.uint64(1)
+            bits &= bits - np.uint64(1)
+    return np.int64(k)
 
 
 @njit(cache=True, parallel=True)
@@ -385,7 +430,9 @@ def _cell_pass(xs, order, cell_start, ncell, reach, period, r2max, maxcand, offs
         for c in range(t * ncells // nchunk, (t + 1) * ncells // nchunk):
             if cell_start[c + 1] == cell_start[c]:
                 continue
-            m = _gather_candidates(c, xs, order, cell_start, ncell, reach, period, r2max, cx, cj)
+            m, q_own, ascending = _gather_candidates(
+                c, xs, order, cell_start, ncell, reach, period, r2max, cx, cj
+            )
             if fill:
                 hit[m : m + 8] = 0  # padding of the last 8-candidate word
             for p in range(cell_start[c], cell_start[c + 1]):
@@ -400,20 +447,16 @@ def _cell_pass(xs, order, cell_start, ncell, reach, period, r2max, maxcand, offs
                         d0 = xi0 - cx0[q]
                         d1 = xi1 - cx1[q]
                         d2 = xi2 - cx2[q]
-                        hit[q] = (d0 * d0 + d1 * d1 + d2 * d2 <= r2max) & (cj[q] != i)
-                    for w in range(np.uint64((m + 7) // 8)):
-                        if hit8[w] != 0:
-                            for q in range(8 * w, 8 * w + 8):
-                                buf[np.uint64(k)] = cj[q]
-                                k += hit[q]
-                    base = offsets[i]
-                    ordered = True
-                    for q in range(k):
+                        hit[q] = d0 * d0 + d1 * d1 + d2 * d2 <= r2max
+                    hit[q_own + p - cell_start[c]] = 0  # self
+                    k = _compact(hit8, cj, m, buf)
+                    base = np.uint64(offsets[i])
+                    for q in range(np.uint64(k)):
                         out[base + q] = buf[q]
-                        if q > 0 and buf[q] < buf[q - 1]:
-                            ordered = False
-                    if not ordered:  # particles not cell-sorted, or stencil across a period
-                        out[base : base + k].sort()
+                    # a subsequence of ascending candidates ascends; otherwise (particles
+                    # not cell-sorted, or a tiny periodic box) sort the segment
+                    if not ascending:
+                        out[base : base + np.uint64(k)].sort()
                 else:
                     for q in range(np.uint64(m)):
                         d0 = xi0 - cx0[q]
@@ -447,6 +490,8 @@ def build_neighbor_list(
     """
     x = _check_positions(x)
     n, dim = x.shape
+    if sys.byteorder != "little":  # _compact reads a byte mask as little-endian words
+        raise NotImplementedError("the neighbour search assumes a little-endian machine")
     radius = float(radius)
     if not (np.isfinite(radius) and radius > 0.0):
         raise ValueError(f"search radius must be positive and finite, got {radius}")
