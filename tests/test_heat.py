@@ -215,17 +215,30 @@ def test_insulated_rod_relaxes_to_mean():
 
 
 def test_corrected_free_surface_is_stable():
-    """The corrected operator alone is unstable at free surfaces (eigenvalue with large
-    positive real part); plain rows there (density < 0.95) remove it."""
+    """The corrected operator alone is unstable at a free face (eigenvalue with large
+    positive real part); plain rows within R of the face remove it, and a perturbed set
+    without free faces keeps the corrected rows everywhere."""
+    from sphfem.heat.system import HeatSystem
+
     x, dx = square(12, 0.2, seed=2)
     faces = [BoxBoundary((0, 0), (1, 1), {"xmin": "free", "ymin": ("dirichlet", 1.0)})]
-    bare = build_problem(x, dx * dx, 1.0, 1.0, 1.0, 0.0, dx, faces,
-                         laplacian="fatehi_manzari", free_surface_plain=1e-9)
     fixed = build_problem(x, dx * dx, 1.0, 1.0, 1.0, 0.0, dx, faces,
                           laplacian="fatehi_manzari")
-    assert np.linalg.eigvals(bare.system.matrix()[0].toarray()).real.max() > 1.0
-    assert fixed.system.plain_rows.sum() > 0
-    assert np.linalg.eigvals(fixed.system.matrix()[0].toarray()).real.max() < 0.0
+    s = fixed.system
+    bare = HeatSystem(s.kernel_args, s.rho_c, s.k, s.active, s.ghost_index, s.ghost_type,
+                      s.ghost_source, s.ghost_t_wall, laplacian="fatehi_manzari",
+                      dirichlet_mode="antisymmetric", ghost_ratio=s.ghost_ratio)
+    assert np.linalg.eigvals(bare.matrix()[0].toarray()).real.max() > 1.0
+    assert s.plain_rows.sum() >= 3 * 12 - 1
+    assert np.linalg.eigvals(s.matrix()[0].toarray()).real.max() < 0.0
+    closed = build_problem(x, dx * dx, 1.0, 1.0, 1.0, 0.0, dx, square_faces_dirichlet(),
+                           laplacian="fatehi_manzari")
+    assert closed.system.plain_rows.sum() == 0
+
+
+def square_faces_dirichlet():
+    return [BoxBoundary((0, 0), (1, 1), {f: ("dirichlet", 0.0)
+                                         for f in ("xmin", "xmax", "ymin", "ymax")})]
 
 
 def test_heat1d_corrected_converges_second_order():

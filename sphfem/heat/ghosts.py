@@ -19,8 +19,9 @@ what is implemented.
 Boundary conditions (sec. 2.3.3.2):
 
 * ``dirichlet`` -- the ghost holds the wall temperature T_w (``hold``, the thesis), or is
-  the antisymmetric image 2 T_w - T_s of its mirror source s (``antisymmetric``: exact for
-  T linear across the wall, second order);
+  the antisymmetric image T_w - r (T_s - T_w) of its mirror source s, r = d_g / d_s the
+  ratio of their distances to the wall (``antisymmetric``: exact for T linear across the
+  wall, second order; r = 1 on a lattice, capped at ``R_MAX``);
 * ``insulated`` -- the ghost copies the temperature of a real particle: the one nearest the
   ghost's mirror image across the face(s) (``mirror``: a symmetric extension, zero normal
   gradient to second order, and on a lattice exactly energy conserving), or the real
@@ -49,6 +50,8 @@ DIRICHLET, INSULATED = 1, 2
 DIRICHLET_MODES = ("hold", "antisymmetric")
 NEUMANN_SOURCES = ("mirror", "nearest")
 _AXES = "xyz"
+#: largest extrapolation ratio d_ghost / d_source of antisymmetric Dirichlet ghosts
+R_MAX = 3.0
 
 
 @dataclass
@@ -107,7 +110,12 @@ class Ghosts:
     source: np.ndarray
     t_wall: np.ndarray
     face: np.ndarray
+    ratio: np.ndarray | None = None
     stats: dict = field(default_factory=dict)
+
+    def __post_init__(self):
+        if self.ratio is None:
+            self.ratio = np.ones(self.x.shape[0])
 
     @property
     def n(self) -> int:
@@ -167,7 +175,7 @@ def place_ghosts(x, vol, dx: float, R: float, faces: list[Face], *, kernel="wend
     low = np.flatnonzero(dens < eta_place)
     stats = {"low_density_particles": int(low.size)}
     empty = Ghosts(np.zeros((0, dim)), np.zeros(0, np.int8), np.zeros(0, np.int64),
-                   np.zeros(0), np.zeros(0, np.int64), stats)
+                   np.zeros(0), np.zeros(0, np.int64), None, stats)
     if low.size == 0 or not any(f.bc != "free" for f in faces):
         return empty
     # lattice points within R of every low-density particle
@@ -214,8 +222,16 @@ def place_ghosts(x, vol, dx: float, R: float, faces: list[Face], *, kernel="wend
     else:
         target = mirror
     _, source = tree.query(target)
+    # antisymmetric Dirichlet: T_g = T_w - r (T_s - T_w), r = d_g / d_s (depth of the ghost
+    # beyond, and of its source inside, the Dirichlet face): exact for T linear along the
+    # normal also when the real particles are off the lattice (r = 1 on it); r <= R_MAX
+    ratio = np.ones(pts.shape[0])
+    for q in np.flatnonzero(gtype == DIRICHLET):
+        fc = faces[face[q]]
+        d_s = fc.side * (fc.position - x[source[q], fc.axis])
+        ratio[q] = min(depth[q, face[q]] / max(d_s, 1e-12), R_MAX)
     stats["ghosts"] = int(pts.shape[0])
     stats["dirichlet"] = int((gtype == DIRICHLET).sum())
     stats["insulated"] = int((gtype == INSULATED).sum())
     return Ghosts(np.ascontiguousarray(pts), gtype, source.astype(np.int64), t_wall,
-                  face.astype(np.int64), stats)
+                  face.astype(np.int64), ratio, stats)

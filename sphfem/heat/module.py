@@ -63,6 +63,7 @@ class HeatConduction(PhysicsModule):
             ps.append(g)
             sim.update_neighbors()
         self.ghosts = gh
+        self.faces = faces
         self._ghost_index = np.arange(n, n + gh.n)
         self._ghost_source = gh.source.copy()
         self._build(sim)
@@ -79,13 +80,13 @@ class HeatConduction(PhysicsModule):
         prm, ps = self.params, sim.particles
         args = sim.kernel_args
         active = ps.kind != GHOST
-        plain = (free_surface_rows(args, prm.free_surface_plain)
+        plain = (free_surface_rows(args, prm.free_surface_plain, self.faces)
                  if prm.laplacian != "cleary" else None)
         gh = self.ghosts
         self.system = HeatSystem(args, ps.m * ps.c_heat / ps.vol, ps.k_heat, active,
                                  self._ghost_index, gh.type, self._ghost_source, gh.t_wall,
                                  laplacian=prm.laplacian, dirichlet_mode=prm.dirichlet_ghosts,
-                                 plain_rows=plain)
+                                 plain_rows=plain, ghost_ratio=gh.ratio)
         self.system.apply_ghosts(ps.T)
         if prm.time_integration == "explicit":
             self.stepper = ExplicitStepper(self.system)

@@ -13,9 +13,9 @@ Keys and units (the future ``[heat]`` section uses the same names):
 ``dt``                 fixed heat step [s] (overrides ``implicit_dt_factor``).
 ``cfl``                safety factor on the explicit limit (<= 1) [-].
 ``startup``            Crank-Nicolson steps replaced by two backward-Euler half steps.
-``free_surface_plain`` corrected form only: particles with number density below this use
-                       the plain rows (zero-flux free surface; the corrected operator
-                       has growing modes at free surfaces otherwise) [-].
+``free_surface_plain`` corrected form only: particles with number density below this (and
+                       all within R of a free face) use the plain rows (zero-flux free
+                       surface; the corrected operator has growing modes there otherwise).
 ``eta_place``          ghosts are placed around particles with number density below this.
 ``eta_trim``           ghosts with number density above this are removed.
 ``dirichlet_ghosts``   "antisymmetric" (T_g = 2 T_w - T_mirror, second order, default)
@@ -63,7 +63,7 @@ class HeatParams:
     dt: float | None = None
     cfl: float = 1.0
     startup: int = 1
-    free_surface_plain: float = 0.95
+    free_surface_plain: float = 0.85
     eta_place: float = 0.85
     eta_trim: float = 1.3
     dirichlet_ghosts: str = "antisymmetric"

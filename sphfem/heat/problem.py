@@ -77,20 +77,30 @@ class HeatProblem:
         return RunResult(self.T[: self.n_real].copy(), nsteps, dt, wall, ledger.to_dict())
 
 
-def free_surface_rows(kernel_args, threshold: float = 0.95) -> np.ndarray:
-    """Particles whose number density sum_j V_j W_ij (ghosts counted) is below
-    ``threshold``: those near a free surface.
+def free_surface_rows(kernel_args, threshold: float = 0.85, faces=(), n_real=None):
+    """Rows that take the plain weights under the corrected Laplacian: particles within the
+    support radius R of a ``free`` face, and particles whose number density
+    sum_j V_j W_ij (ghosts counted) is below ``threshold`` (free surfaces that no face
+    describes).
 
     The Fatehi-Manzari Laplacian is exact for quadratics, so on a one-sided stencil it
     imposes no boundary condition at all, and the discrete operator then has eigenvalues
     with large positive real part (measured: Re(lambda) ~ +500 on a 12 x 12 patch with one
     free edge, dx = 1/12); explicit and implicit runs both blow up.  The plain (Cleary)
     rows there exchange no heat through the surface (a zero-flux condition) and remove
-    those modes; 0.95 (about two particle layers) was needed on perturbed particles,
-    the thesis' eta_place = 0.85 (one layer) is enough only on a lattice.
+    those modes.  A density threshold alone needs ~0.95 on perturbed particles, which also
+    catches ~8 % of the interior (random clustering) and spoils convergence; hence the
+    geometric rule for faces and the low default for the density rule.
     """
-    x = kernel_args[0]
-    return interpolate(np.ones(x.shape[0]), *kernel_args) < threshold
+    x, R = kernel_args[0], kernel_args[4]
+    rows = interpolate(np.ones(x.shape[0]), *kernel_args) < threshold
+    for f in faces:
+        if f.bc == "free":
+            d = f.side * (f.position - x[:, f.axis])
+            rows |= d < R
+    if n_real is not None:
+        rows[n_real:] = False
+    return rows
 
 
 def build_problem(x, vol, rho, c, k, T0, dx: float, boundaries=(), *,
@@ -98,14 +108,13 @@ def build_problem(x, vol, rho, c, k, T0, dx: float, boundaries=(), *,
                   support_factor: float = 3.0, eta_place: float = 0.85,
                   eta_trim: float = 1.3, dirichlet_ghosts: str = "antisymmetric",
                   insulated_source: str = "mirror", origin=None, held=None,
-                  free_surface_plain: float = 0.95) -> HeatProblem:
+                  free_surface_plain: float = 0.85) -> HeatProblem:
     """Place ghosts for ``boundaries`` around the real particles ``x`` (n, dim) and build
     the conduction system.  ``rho`` [kg/m^3], ``c`` [J/(kg K)], ``k`` [W/(m K)], ``T0`` [K]
     are per particle or scalars; ``held`` marks real particles whose T stays fixed.
 
-    With the corrected Laplacian, active particles whose number density (ghosts counted)
-    is below ``free_surface_plain`` -- i.e. near a free surface -- use the plain rows (see
-    :func:`free_surface_rows`)."""
+    With the corrected Laplacian, particles near a free face or with number density (ghosts
+    counted) below ``free_surface_plain`` use the plain rows (:func:`free_surface_rows`)."""
     x = np.ascontiguousarray(np.asarray(x, float))
     if x.ndim != 2:
         raise ValueError("positions must have shape (n, dim)")
@@ -133,9 +142,10 @@ def build_problem(x, vol, rho, c, k, T0, dx: float, boundaries=(), *,
     if held is not None:
         active[:n] &= ~np.asarray(held, bool)
     args = (xa, va, nl.offsets, nl.indices, R, sigma, kind, period)
-    plain = free_surface_rows(args, free_surface_plain) if laplacian != "cleary" else None
+    plain = (free_surface_rows(args, free_surface_plain, faces, n)
+             if laplacian != "cleary" else None)
     system = HeatSystem(args, ma * ca / va, ka, active, np.arange(n, na), gh.type, gh.source,
                         gh.t_wall, laplacian=laplacian, dirichlet_mode=dirichlet_ghosts,
-                        plain_rows=plain)
+                        plain_rows=plain, ghost_ratio=gh.ratio)
     system.apply_ghosts(Ta)
     return HeatProblem(system, gh, n, xa, ma, ca, Ta)

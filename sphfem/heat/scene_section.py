@@ -48,8 +48,9 @@ HEAT = Section("heat", (
           doc="safety factor on the explicit limit dt = 1/max_i sum_j |g_ij|/(rho c)_i"),
     Param("startup", int, 1, ge=0,
           doc="Crank-Nicolson steps taken as two backward-Euler half steps (Rannacher)"),
-    Param("free_surface_plain", float, 0.95, gt=0.0, le=1.0,
-          doc="fatehi_manzari: particles with number density below this use plain rows"),
+    Param("free_surface_plain", float, 0.85, gt=0.0, le=1.0,
+          doc="fatehi_manzari: particles with number density below this, and all within "
+              "R of a free face, use the plain rows (stability at free surfaces)"),
     Param("eta_place", float, 0.85, positive=True,
           doc="ghosts are placed around particles with number density below this"),
     Param("eta_trim", float, 1.3, positive=True,

@@ -24,12 +24,15 @@ from sphfem.heat.ghosts import DIRICHLET, INSULATED
 
 
 @njit(cache=True)
-def apply_ghost_rules(T, gi, gt, gs, tw, antisymmetric):
-    """T_g = T_w (hold) or 2 T_w - T_s (antisymmetric) for Dirichlet ghosts, T_g = T_s for
-    insulated ones (s = source particle); see :mod:`sphfem.heat.ghosts`."""
+def apply_ghost_rules(T, gi, gt, gs, tw, ratio, antisymmetric):
+    """T_g = T_w (hold) or T_w - r (T_s - T_w) (antisymmetric) for Dirichlet ghosts, T_g = T_s
+    for insulated ones (s = source particle); see :mod:`sphfem.heat.ghosts`."""
     for q in range(gi.shape[0]):
         if gt[q] == DIRICHLET:
-            T[gi[q]] = 2.0 * tw[q] - T[gs[q]] if antisymmetric else tw[q]
+            if antisymmetric:
+                T[gi[q]] = (1.0 + ratio[q]) * tw[q] - ratio[q] * T[gs[q]]
+            else:
+                T[gi[q]] = tw[q]
         elif gt[q] == INSULATED:
             T[gi[q]] = T[gs[q]]
 
@@ -91,21 +94,21 @@ def _stage(T, g, offsets, indices, inv_rc, active, vol, g_out, rate):
 
 
 @njit(cache=True)
-def heun_step(T, dt, g, offsets, indices, inv_rc, active, vol, g_out, gi, gt, gs, tw,
+def heun_step(T, dt, g, offsets, indices, inv_rc, active, vol, g_out, gi, gt, gs, tw, ratio,
               antisymmetric):
     """One Heun step of eq. (2) in place, ghosts refreshed per stage; returns the boundary
     heat input dt/2 (q(T^n) + q(T*)) [J]."""
     n = T.shape[0]
     k1 = np.empty(n)
     k2 = np.empty(n)
-    apply_ghost_rules(T, gi, gt, gs, tw, antisymmetric)
+    apply_ghost_rules(T, gi, gt, gs, tw, ratio, antisymmetric)
     q1 = _stage(T, g, offsets, indices, inv_rc, active, vol, g_out, k1)
     T1 = T + dt * k1
-    apply_ghost_rules(T1, gi, gt, gs, tw, antisymmetric)
+    apply_ghost_rules(T1, gi, gt, gs, tw, ratio, antisymmetric)
     q2 = _stage(T1, g, offsets, indices, inv_rc, active, vol, g_out, k2)
     for i in range(n):
         T[i] += 0.5 * dt * (k1[i] + k2[i])
-    apply_ghost_rules(T, gi, gt, gs, tw, antisymmetric)
+    apply_ghost_rules(T, gi, gt, gs, tw, ratio, antisymmetric)
     return 0.5 * dt * (q1 + q2)
 
 
@@ -123,7 +126,7 @@ class ExplicitStepper:
         s = self.system
         return heun_step(T, dt, s.g, s.offsets, s.indices, self._inv_rc, s.active, s.vol,
                          s.g_outside, s.ghost_index, s.ghost_type, s.ghost_source,
-                         s.ghost_t_wall, s.dirichlet_mode == "antisymmetric")
+                         s.ghost_t_wall, s.ghost_ratio, s.dirichlet_mode == "antisymmetric")
 
 
 class ThetaStepper:

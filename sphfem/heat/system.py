@@ -40,7 +40,7 @@ class HeatSystem:
 
     def __init__(self, kernel_args, rho_c, k, active, ghost_index=None, ghost_type=None,
                  ghost_source=None, ghost_t_wall=None, laplacian: str = "cleary",
-                 dirichlet_mode: str = "hold", plain_rows=None):
+                 dirichlet_mode: str = "hold", plain_rows=None, ghost_ratio=None):
         self.kernel_args = kernel_args
         x, vol, offsets, indices = kernel_args[:4]
         self.offsets, self.indices = offsets, indices
@@ -61,6 +61,8 @@ class HeatSystem:
         self.ghost_source = e if ghost_source is None else np.asarray(ghost_source, np.int64)
         self.ghost_t_wall = (np.zeros(0) if ghost_t_wall is None
                              else np.asarray(ghost_t_wall, float))
+        self.ghost_ratio = (np.ones(self.ghost_index.size) if ghost_ratio is None
+                            else np.asarray(ghost_ratio, float))
         if np.any(~self.active[self.ghost_source]):
             raise ValueError("every ghost source must be an active particle")
         self.plain_rows = (np.zeros(self.n, bool) if plain_rows is None
@@ -83,7 +85,8 @@ class HeatSystem:
         if self.dirichlet_mode == "hold":
             T[gi[d]] = tw[d]
         else:
-            T[gi[d]] = 2.0 * tw[d] - T[gs[d]]
+            r = self.ghost_ratio[d]
+            T[gi[d]] = (1.0 + r) * tw[d] - r * T[gs[d]]
         s = gt == INSULATED
         T[gi[s]] = T[gs[s]]
 
@@ -115,10 +118,11 @@ class HeatSystem:
         if self.dirichlet_mode == "hold":
             b[gi[d]] = tw[d]
         else:
-            b[gi[d]] = 2.0 * tw[d]
+            r = self.ghost_ratio[d]
+            b[gi[d]] = (1.0 + r) * tw[d]
             rows.append(gi[d])
             cols.append(col[gs[d]])
-            vals.append(-np.ones(int(d.sum())))
+            vals.append(-r)
         rows.append(gi[s])
         cols.append(col[gs[s]])
         vals.append(np.ones(int(s.sum())))
@@ -130,16 +134,22 @@ class HeatSystem:
 
     # -- time step -----------------------------------------------------------------------
     def stable_dt(self) -> float:
-        """Explicit limit dt = 1 / max_i sum_j |g_ij| / (rho_i c_i) over active particles.
+        """Explicit limit dt = 2 / max_i (|A_ii| + sum_{j != i} |A_ij|) of eq. (2).
 
-        Gershgorin: every eigenvalue of A lies in [-2 max_i sum_j |g_ij|/(rho c)_i, 0]
-        for non-negative g, and forward Euler and Heun are stable for dt |lambda| <= 2.
-        On a lattice this is dt = C rho c dx^2 / k with C from :func:`lattice_constant`.
+        Gershgorin: every eigenvalue of A lies in a disc of centre A_ii and radius
+        sum_{j != i} |A_ij|, and forward Euler and Heun are stable for real eigenvalues in
+        [-2/dt, 0].  A includes the ghost rules (an antisymmetric ghost adds -r g to its
+        source's column).  Interior rows give 1 / (sum_j g_ij / (rho c)_i), i.e.
+        dt = C rho c dx^2 / k on a lattice; ``diagnostics`` reports C.
         """
-        rows = np.repeat(np.arange(self.n), np.diff(self.offsets))
-        s = np.bincount(rows, weights=np.abs(self.g), minlength=self.n) / self.rho_c
-        smax = float(s[self.active].max()) if self.active.any() else 0.0
-        return 1.0 / smax if smax > 0 else np.inf
+        if self.active_index.size == 0:
+            return np.inf
+        A, _ = self.matrix()
+        diag = A.diagonal()
+        rowabs = np.asarray(abs(A).sum(axis=1)).ravel()
+        s = np.abs(diag) + (rowabs - np.abs(diag))
+        smax = float(s.max())
+        return 2.0 / smax if smax > 0 else np.inf
 
     def boundary_heat_rate(self, T: np.ndarray) -> float:
         """Heat entering the active particles from ghosts and held particles [W]:
