@@ -160,7 +160,7 @@ def _make_grid(n, radius, lo, hi, period, cells_per_radius) -> _Grid:
 # ----------------------------------------------------------------------------- numba kernels
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True)  # serial: memory bound, cheaper than a parallel region
 def _cell_coords(x, origin, width, ncell, period):
     """Row-major cell id of every particle (last axis fastest) and the positions ``xw``
     (3, n), wrapped into the box on periodic axes, zero on the padded leading axes."""
@@ -168,7 +168,7 @@ def _cell_coords(x, origin, width, ncell, period):
     off = 3 - dim
     xw = np.zeros((3, n))
     cid = np.empty(n, dtype=np.int64)
-    for i in prange(n):
+    for i in range(n):
         c = 0
         for K in range(3):
             ck = 0
@@ -207,12 +207,12 @@ def _counting_sort(cid, ncells):
     return order, cell_start
 
 
-@njit(cache=True, parallel=True)
+@njit(cache=True)  # serial: memory bound, cheaper than a parallel region
 def _gather_columns(xw, order):
     """Positions in cell order, one contiguous row per axis (3, n)."""
     n = order.shape[0]
     xs = np.empty((3, n))
-    for p in prange(n):
+    for p in range(n):
         j = order[p]
         xs[0, p] = xw[0, j]
         xs[1, p] = xw[1, j]
