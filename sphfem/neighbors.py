@@ -529,26 +529,53 @@ def build_neighbor_list(
     return NeighborList(offsets, indices, radius, period)
 
 
-def cell_sort_permutation(x, cell_size, lo, hi, period=None) -> np.ndarray:
+@njit(cache=True)
+def _sub_cell_ids(xw, origin, width, ncell, nsub):
+    """Row-major index of the sub-cell (``nsub`` per axis) holding each particle."""
+    n = xw.shape[1]
+    sid = np.empty(n, dtype=np.int64)
+    for i in range(n):
+        c = 0
+        for K in range(3):
+            f = (xw[K, i] - origin[K]) / width[K]
+            cell = min(max(np.floor(f), 0.0), ncell[K] - 1.0)
+            sub = min(max(np.floor((f - cell) * nsub), 0.0), nsub - 1.0)
+            c = c * nsub + np.int64(sub)
+        sid[i] = c
+    return sid
+
+
+def cell_sort_permutation(x, cell_size, lo, hi, period=None, *, sub_cells: int = 3):
     """Permutation (int64) ordering particles by row-major cell, last axis fastest.
 
     The cells are those :func:`build_neighbor_list` uses for ``radius = cell_size`` (with
     ``cells_per_radius=1``; pass ``radius / c`` for ``cells_per_radius=c``), so after
     ``particles.reorder(perm)`` the search reads candidates contiguously and finds every
-    neighbour segment already sorted.  Stable: particles in one cell keep their order.
-    Positions outside ``[lo, hi]`` go to the edge cells (wrapped on periodic axes).
+    neighbour segment already sorted.  Within a cell, particles are ordered by sub-cells
+    (``sub_cells`` per axis, row-major), which keeps the hit masks of the search clustered
+    (about 1.5x faster than a random order inside the cells).  Stable: particles in one
+    sub-cell keep their order, so a sorted set gives the identity.  Positions outside
+    ``[lo, hi]`` go to the edge cells (wrapped on periodic axes).
     """
     x = _check_positions(x)
     n, dim = x.shape
     cell_size = float(cell_size)
     if not (np.isfinite(cell_size) and cell_size > 0):
         raise ValueError(f"cell size must be positive and finite, got {cell_size}")
+    if not 1 <= int(sub_cells) <= 8:
+        raise ValueError(f"sub_cells must be in 1..8, got {sub_cells}")
     lo = _as_vector(lo, dim, "lo")
     hi = _as_vector(hi, dim, "hi")
     period = np.zeros(dim) if period is None else _as_vector(period, dim, "period")
     if n == 0:
         return np.zeros(0, dtype=np.int64)
     g = _make_grid(n, cell_size, lo, hi, period, 1)
-    _, cid = _cell_coords(x, g.origin, g.width, g.ncell, g.period)
-    order, _ = _counting_sort(cid, int(np.prod(g.ncell)))
-    return order
+    xw, cid = _cell_coords(x, g.origin, g.width, g.ncell, g.period)
+    if sub_cells == 1:
+        order, _ = _counting_sort(cid, int(np.prod(g.ncell)))
+        return order
+    # two stable counting sorts (LSD radix): by sub-cell, then by cell
+    sid = _sub_cell_ids(xw, g.origin, g.width, g.ncell, int(sub_cells))
+    by_sub, _ = _counting_sort(sid, int(sub_cells) ** 3)
+    by_cell, _ = _counting_sort(cid[by_sub], int(np.prod(g.ncell)))
+    return by_sub[by_cell]
