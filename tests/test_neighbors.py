@@ -190,13 +190,14 @@ def test_errors():
         build_neighbor_list(x, 0.1, lo, hi, np.zeros(3))
 
 
-def test_unsorted_input_and_cell_sort_permutation():
+@pytest.mark.parametrize("sub_cells", [1, 3])
+def test_unsorted_input_and_cell_sort_permutation(sub_cells):
     rng = np.random.default_rng(5)
     x = rng.random((3000, 3))
     lo, hi, period = np.zeros(3), np.ones(3), np.array([1.0, 0.0, 1.0])
     radius = 0.09
     a = build_neighbor_list(x, radius, lo, hi, period)
-    perm = cell_sort_permutation(x, radius, lo, hi, period)
+    perm = cell_sort_permutation(x, radius, lo, hi, period, sub_cells=sub_cells)
     assert np.array_equal(np.sort(perm), np.arange(x.shape[0]))
     xs = x[perm]
     b = build_neighbor_list(xs, radius, lo, hi, period)
@@ -205,7 +206,8 @@ def test_unsorted_input_and_cell_sort_permutation():
     relabelled = {tuple(sorted((int(perm[i]), int(perm[j])))) for i, j in pair_set(b)}
     assert relabelled == pair_set(a)
     # a sorted set is already in cell order
-    assert np.array_equal(cell_sort_permutation(xs, radius, lo, hi, period), np.arange(x.shape[0]))
+    again = cell_sort_permutation(xs, radius, lo, hi, period, sub_cells=sub_cells)
+    assert np.array_equal(again, np.arange(x.shape[0]))
 
 
 def test_deterministic_across_threads():
