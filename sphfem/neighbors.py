@@ -417,7 +417,13 @@ def _cell_pass(xs, order, cell_start, ncell, reach, period, r2max, maxcand, offs
     fill = out.shape[0] > 0
     ncells = cell_start.shape[0] - 1
     counts = np.zeros(n, dtype=np.int64)
-    nchunk = max(1, min(ncells, 1024))
+    # chunks of consecutive cells holding about equal numbers of particles (empty regions
+    # of the grid cost nothing), split statically between the threads
+    nchunk = max(1, min(ncells, n, 1024))
+    targets = (np.arange(nchunk + 1) * n) // nchunk
+    bounds = np.searchsorted(cell_start[1:], targets, side="right")
+    bounds[0] = 0
+    bounds[nchunk] = ncells
     for t in prange(nchunk):
         cx = np.empty((3, maxcand + 1))
         cj = np.empty(maxcand + 8, dtype=np.int32)
@@ -427,7 +433,7 @@ def _cell_pass(xs, order, cell_start, ncell, reach, period, r2max, maxcand, offs
         cx0 = cx[0]
         cx1 = cx[1]
         cx2 = cx[2]
-        for c in range(t * ncells // nchunk, (t + 1) * ncells // nchunk):
+        for c in range(bounds[t], bounds[t + 1]):
             if cell_start[c + 1] == cell_start[c]:
                 continue
             m, q_own, ascending = _gather_candidates(

@@ -246,3 +246,14 @@ def test_bench_quick_is_json_serialisable():
     assert case["pairs"] > 0 and case["build_s"] > 0 and case["pairs_per_s"] > 0
     assert case["density_max_rel_err_interior"] < 0.01
     assert json.loads(text)["benchmark"] == "neighbors"
+
+
+def test_clustered_with_empty_regions():
+    """A dense blob plus sparse particles: chunks balanced by particle count stay exact."""
+    rng = np.random.default_rng(11)
+    blob = 0.8 + 0.05 * rng.random((1500, 3))
+    sparse = rng.random((200, 3))
+    x = np.vstack([blob, sparse])
+    nl = build_neighbor_list(x, 0.02, np.zeros(3), np.ones(3), np.zeros(3))
+    check_structure(nl, x.shape[0])
+    assert pair_set(nl) == reference_pairs(x, 0.02)
