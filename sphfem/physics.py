@@ -51,6 +51,13 @@ class PhysicsModule:
         """Advance this module's state by ``dt``."""
         raise NotImplementedError
 
+    def reorder(self, sim, perm: np.ndarray) -> None:
+        """The driver permuted every particle field (new index k holds old ``perm[k]``).
+
+        Modules keep per-particle state in ``sim.particles`` only; a module that caches
+        particle indices (ghost sources, say) remaps them here.
+        """
+
     def diagnostics(self, sim) -> dict:
         """JSON-serialisable figures for summary.json (fallback counts, energy drift, ...)."""
         return {}

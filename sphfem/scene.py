@@ -115,6 +115,12 @@ SPH = Section("sph", (
           doc="particle spacing"),
     Param("support_factor", float, 3.0, gt=1.0,
           doc="support radius R = support_factor * dx; must exceed the spacing (> 1)"),
+    Param("skin", float, None, ge=0.0, le=1.0, default_doc="0.15 when a module moves "
+          "particles, else 0",
+          doc="Verlet skin: neighbours are listed within (1 + skin) R and the list is rebuilt "
+          "only when a particle has moved more than skin R / 2"),
+    Param("sort_every", int, 10, ge=0,
+          doc="re-sort particles by cell every this many neighbour rebuilds (0 = never)"),
 ), doc="Discretisation shared by every SPH operator.", required=True)
 
 _POSITIVE_OPT = dict(positive=True, default=None)

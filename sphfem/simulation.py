@@ -16,15 +16,29 @@ import time
 from pathlib import Path
 
 import numpy as np
+from numba import njit
 
 from sphfem import __version__, kernels
-from sphfem.neighbors import build_neighbor_list, cell_sort_permutation
+from sphfem.neighbors import build_neighbor_list, cell_sort_permutation, min_image
 from sphfem.output import ParticleSeries, atomic_write_bytes, write_json
 from sphfem.physics import build_modules
 
 logger = logging.getLogger(__name__)
 
 CHECKPOINT = "checkpoint.npz"
+
+
+@njit(cache=True)
+def _max_displacement(x, x0, period):
+    """Largest |x - x0| over particles (minimum image on periodic axes)."""
+    best = 0.0
+    for i in range(x.shape[0]):
+        s = 0.0
+        for k in range(x.shape[1]):
+            d = min_image(x[i, k] - x0[i, k], period[k])
+            s += d * d
+        best = max(best, s)
+    return np.sqrt(best)
 
 
 class SimulationStopped(Exception):
@@ -60,6 +74,13 @@ class Simulation:
         self.t = 0.0
         self.step_count = 0
         self.nbrs = None
+        self.nbrs_version = 0
+        self.moving = any(m.moves_particles for m in self.modules)
+        skin = scene.sph.skin
+        self.skin = (0.15 if self.moving else 0.0) if skin is None else skin
+        self.sort_every = scene.sph.sort_every
+        self.rebuilds = 0
+        self._x_at_build = None
         self.wall = {"neighbors": 0.0, **{m.name: 0.0 for m in self.modules}}
         self._sort_by_cell()
         self.update_neighbors()
@@ -70,15 +91,43 @@ class Simulation:
                     self.R, [m.name for m in self.modules])
 
     # -- neighbours -----------------------------------------------------------------------
-    def _sort_by_cell(self) -> None:
-        perm = cell_sort_permutation(self.particles.x, self.R, self.lo, self.hi)
+    def _sort_by_cell(self) -> np.ndarray:
+        perm = cell_sort_permutation(self.particles.x, self.R, self.lo, self.hi, self.period)
         self.particles.reorder(perm)
+        return perm
 
     def update_neighbors(self) -> None:
+        """Rebuild the neighbour list now (listing pairs within (1 + skin) R)."""
         t0 = time.perf_counter()
-        self.nbrs = build_neighbor_list(self.particles.x, self.R, self.lo, self.hi, self.period)
+        x = self.particles.x
+        self.nbrs = build_neighbor_list(x, self.R * (1.0 + self.skin), self.lo, self.hi,
+                                        self.period)
+        self._x_at_build = x.copy()
+        self.rebuilds += 1
+        self.nbrs_version += 1
         self.wall["neighbors"] += time.perf_counter() - t0
 
+    def ensure_neighbors(self) -> bool:
+        """Rebuild the list if some particle moved more than skin R / 2 since the last build
+        (or the particle count changed); return True when it was rebuilt.
+
+        Every pair closer than R is then still listed, because two particles approach each
+        other by at most twice the largest displacement.
+        """
+        x = self.particles.x
+        if self._x_at_build is None or x.shape != self._x_at_build.shape:
+            self.update_neighbors()
+            return True
+        if _max_displacement(x, self._x_at_build, self.period) > 0.5 * self.skin * self.R:
+            if self.sort_every and self.rebuilds % self.sort_every == 0:
+                t0 = time.perf_counter()
+                perm = self._sort_by_cell()
+                self.wall["neighbors"] += time.perf_counter() - t0
+                for mod in self.modules:
+                    mod.reorder(self, perm)
+            self.update_neighbors()
+            return True
+        return False
     @property
     def kernel_args(self) -> tuple:
         """(x, vol, offsets, indices, R, sigma, kind, period): the operators' common tail."""
@@ -101,8 +150,8 @@ class Simulation:
         return limits[name], name
 
     def step(self, dt: float) -> None:
-        if any(m.moves_particles for m in self.modules) and self.step_count > 0:
-            self.update_neighbors()
+        if self.moving:
+            self.ensure_neighbors()
         for mod in self.modules:
             t0 = time.perf_counter()
             mod.step(self, dt)

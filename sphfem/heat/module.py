@@ -113,6 +113,14 @@ class HeatConduction(PhysicsModule):
         heat = self.stepper.step(ps.T, dt)
         self.ledger.record(self.system.energy(ps.T, ps.m, ps.c_heat), heat)
 
+    def reorder(self, sim, perm) -> None:
+        """Remap the cached ghost indices after the driver's cell sort."""
+        new_of_old = np.empty_like(perm)
+        new_of_old[perm] = np.arange(perm.shape[0])
+        self._ghost_index = new_of_old[self._ghost_index]
+        self._ghost_source = new_of_old[self._ghost_source]
+        self._nbrs = None  # conductances are rebuilt from the new list on the next step
+
     def diagnostics(self, sim) -> dict:
         s = self.system
         ps = sim.particles
