@@ -48,6 +48,9 @@ def _parser() -> argparse.ArgumentParser:
     b.add_argument("name", help="benchmark name: neighbors | density")
     b.add_argument("--json", metavar="FILE", help="write the figures as JSON")
     b.add_argument("--quick", action="store_true", help="small sizes (for smoke tests)")
+
+    sub.add_parser("mesh", help="write a gmsh substrate mesh (sphfem mesh block --help)",
+                   add_help=False)
     return p
 
 
@@ -110,6 +113,11 @@ def _cmd_run(args) -> int:
 
 def main(argv=None) -> int:
     parser = _parser()
+    argv = sys.argv[1:] if argv is None else list(argv)
+    if argv[:1] == ["mesh"]:  # the mesh recipes own their argument parser
+        from sphfem.fem.meshing import mesh_command
+
+        return mesh_command(argv[1:])
     try:
         args = parser.parse_args(argv)
     except SystemExit as e:  # argparse already printed its one-line usage error
