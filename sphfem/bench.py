@@ -28,6 +28,7 @@ import time
 
 import numba
 import numpy as np
+from numba import njit, prange
 
 from sphfem.density import summation_density
 from sphfem.kernels import WENDLAND_C2, kernel_sigma
@@ -66,6 +67,36 @@ def _threading_layer() -> str:
         return numba.threading_layer()
     except ValueError:  # no parallel function has run yet
         return "not initialised"
+
+
+@njit(parallel=True, cache=True)
+def _calibration_work(n):
+    out = np.empty(n)
+    for i in prange(n):
+        acc = 0.0
+        for k in range(2000):
+            acc += np.sqrt(i + k * 1.0)
+        out[i] = acc
+    return out
+
+
+def parallel_calibration(threads) -> dict:
+    """Speed-up of a trivially parallel, compute-bound loop at each thread count.
+
+    On a shared machine this shows how many cores were really free during the run: a
+    value near 1 for 2 threads means the second core was busy with other work.
+    """
+    saved = numba.get_num_threads()
+    times = {}
+    try:
+        _calibration_work(100)
+        for t in threads:
+            numba.set_num_threads(t)
+            times[t], _, _ = _best(lambda: _calibration_work(4000), 5)
+    finally:
+        numba.set_num_threads(saved)
+    t1 = times.get(1, min(times.values()))
+    return {str(t): t1 / s for t, s in times.items()}
 
 
 def lattice_block(n_target: int, dx: float = 1.0) -> np.ndarray:
@@ -180,9 +211,11 @@ def run_bench(
                 cases.append(_one_case(int(n), int(t), repeats, cells_per_radius))
     finally:
         numba.set_num_threads(saved)
+    machine = machine_info()
+    machine["parallel_speedup_calibration"] = parallel_calibration(threads)
     result = {
         "benchmark": name,
-        "machine": machine_info(),
+        "machine": machine,
         "setup": "3D cubic lattice block, R = 3 dx, Wendland C2, non-periodic, cell-sorted",
         "repeats": repeats,
         "cases": cases,
@@ -199,6 +232,8 @@ def format_table(result: dict) -> str:
         f"{result['benchmark']}: {result['setup']}\n"
         f"cpu: {mi['cpu']} ({mi['cores']} cores), numba {mi['numba']}, {mi['date']}, "
         f"load average {mi['load_average']}\n"
+        f"speed-up of a trivially parallel loop by threads (free cores): "
+        f"{mi.get('parallel_speedup_calibration')}\n"
     )
     cols = (
         f"{'n':>9} {'thr':>3} {'build s':>8} {'(cpu s)':>8} {'pairs':>11} {'build pairs/s':>13} "
