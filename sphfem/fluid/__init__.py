@@ -6,10 +6,25 @@
 * :mod:`sphfem.fluid.guards` -- stability guards;
 * :mod:`sphfem.fluid.wcsph` -- :class:`FluidParams`, :class:`FluidSolver`, the ``fluid``
   physics module;
+* :mod:`sphfem.fluid.scene_section` -- the ``[fluid]`` scene section;
 * :mod:`sphfem.fluid.setup` -- lattices, wall layers and hydrostatic initial states;
 * :mod:`sphfem.fluid.bench` -- the 3D dam-break throughput benchmark.
+
+Importing this package registers the module and its section by name only; the solver
+classes are imported (and numba loaded) on first attribute access.
 """
 
-from sphfem.fluid.wcsph import FluidModule, FluidParams, FluidSolver
+from sphfem.fluid.scene_section import FLUID
+from sphfem.schema import register_module
+
+register_module("fluid", FLUID, target="sphfem.fluid.wcsph:FluidModule")
 
 __all__ = ["FluidModule", "FluidParams", "FluidSolver"]
+
+
+def __getattr__(name):
+    if name in __all__:
+        from sphfem.fluid import wcsph
+
+        return getattr(wcsph, name)
+    raise AttributeError(f"module 'sphfem.fluid' has no attribute {name!r}")

@@ -87,29 +87,40 @@ def _F(d, R, fac2, kkind):
 
 
 @njit(cache=True, parallel=True)
-def filter_wall_rows(offsets, indices, kind):
-    """CSR list in which rows of non-fluid particles keep only their fluid neighbours
-    (fluid rows are copied unchanged): wall rows then cost only what the wall needs."""
+def filter_rows(offsets, indices, kind):
+    """The fluid's view of a neighbour list (CSR), from the kind array alone.
+
+    Fluid rows keep their FLUID and WALL neighbours, wall rows only their FLUID neighbours
+    (deep walls get empty rows), rows of other kinds (SOLID, GHOST) are emptied: wall-wall
+    pairs and pairs with kinds the fluid does not interact with then cost nothing in the
+    passes.  Built once per neighbour-list build and reused until the next one.
+    """
     n = offsets.shape[0] - 1
     counts = np.empty(n, dtype=np.int64)
     for i in prange(n):
-        if kind[i] == FLUID:
-            counts[i] = offsets[i + 1] - offsets[i]
-        else:
-            c = 0
+        ki = kind[i]
+        c = 0
+        if ki == FLUID:
+            for jj in range(offsets[i], offsets[i + 1]):
+                kj = kind[indices[jj]]
+                c += kj == FLUID or kj == WALL
+        elif ki == WALL:
             for jj in range(offsets[i], offsets[i + 1]):
                 c += kind[indices[jj]] == FLUID
-            counts[i] = c
+        counts[i] = c
     new_off = np.zeros(n + 1, dtype=np.int64)
     for i in range(n):
         new_off[i + 1] = new_off[i] + counts[i]
     out = np.empty(new_off[n], dtype=indices.dtype)
     for i in prange(n):
+        ki = kind[i]
+        if ki != FLUID and ki != WALL:
+            continue
         k = new_off[i]
-        fl = kind[i] == FLUID
         for jj in range(offsets[i], offsets[i + 1]):
             j = indices[jj]
-            if fl or kind[j] == FLUID:
+            kj = kind[j]
+            if kj == FLUID or (ki == FLUID and kj == WALL):
                 out[k] = j
                 k += 1
     return new_off, out

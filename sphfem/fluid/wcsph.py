@@ -249,11 +249,19 @@ class FluidSolver:
 
     Parameters: ``particles`` (fields ``v, acc, drho, p, mu, f_fluid`` are added), support
     radius ``R`` [m], domain box ``lo``/``hi`` and ``period`` (0 on open axes), ``params``.
+
+    Neighbours: stand-alone (``sim=None``) the solver keeps its own Verlet list (radius
+    R (1 + skin), cell sort every ``sort_every`` rebuilds).  Driven by a
+    :class:`~sphfem.simulation.Simulation` (``sim`` given) it uses the driver's shared list
+    ``sim.nbrs``: after its half drift it calls ``sim.ensure_neighbors()`` and, whenever
+    ``sim.nbrs_version`` changed, derives its filtered view (:func:`passes.filter_rows`).
+    Both paths run the same passes on the same filtered view.
     """
 
     def __init__(self, particles: ParticleSet, R: float, lo, hi, period=None,
-                 params: FluidParams | None = None, kernel: str = "wendland_c2"):
-        self.p = particles
+                 params: FluidParams | None = None, kernel: str = "wendland_c2", sim=None):
+        self.sim = sim
+        self._p = particles
         self.params = params or FluidParams()
         self.dim = particles.dim
         self.R = float(R)
@@ -274,9 +282,11 @@ class FluidSolver:
         self.t = 0.0
         self.step_count = 0
         self.nbrs = None
+        self._nbrs_version = -1
         self.n_rebuilds = 0
         self.wall = {"neighbors": 0.0, "forces": 0.0, "integrate": 0.0, "guards": 0.0}
         self.last_fallbacks = 0
+        self.guard_message = ""
         self._scratch = None
         self._xref = None
         if self.params.threads:
@@ -284,16 +294,33 @@ class FluidSolver:
         else:
             self.nthreads = 1 if particles.n < SERIAL_BELOW else 0
         with _threads(self.nthreads):
-            self.rebuild_neighbors()
+            if sim is None:
+                self.rebuild_neighbors()
+            else:
+                self._sync_neighbors()
             self.evaluate()
+
+    @property
+    def p(self) -> ParticleSet:
+        """The particle set (the driver's current one when driven)."""
+        return self.sim.particles if self.sim is not None else self._p
 
     # -- neighbours -----------------------------------------------------------------------
     @property
     def list_radius(self) -> float:
         return self.R * (1.0 + self.params.skin)
 
+    def _set_view(self, nl: NeighborList) -> None:
+        """Filtered view of ``nl`` for the passes; (re)size the scratch arrays."""
+        off, idx = passes.filter_rows(nl.offsets, nl.indices, self.p.kind)
+        self.nbrs = NeighborList(off, idx, nl.radius, nl.period)
+        self.n_rebuilds += 1
+        if self._scratch is None or self._scratch.n != self.p.n:
+            self._scratch = _Scratch(self.p.n, self.dim)
+
     def rebuild_neighbors(self) -> None:
-        """Wrap periodic positions, cell-sort every ``sort_every`` builds, rebuild the list."""
+        """Stand-alone: wrap periodic positions, cell-sort every ``sort_every`` builds,
+        rebuild the list."""
         t0 = time.perf_counter()
         x = self.p.x
         for k in range(self.dim):
@@ -303,27 +330,45 @@ class FluidSolver:
         if self.params.sort_every and self.n_rebuilds % self.params.sort_every == 0:
             perm = cell_sort_permutation(x, self.list_radius, self.lo, self.hi, self.period)
             self.p.reorder(perm)
-        self.nbrs = build_neighbor_list(self.p.x, self.list_radius, self.lo, self.hi,
-                                        self.period)
-        # rows of wall particles keep only fluid neighbours (deep walls get empty rows)
-        off, idx = passes.filter_wall_rows(self.nbrs.offsets, self.nbrs.indices, self.p.kind)
-        self.nbrs = NeighborList(off, idx, self.nbrs.radius, self.nbrs.period)
+            self.reorder(perm)
+        self._set_view(build_neighbor_list(self.p.x, self.list_radius, self.lo, self.hi,
+                                           self.period))
         self._xref = self.p.x.copy()
-        self.n_rebuilds += 1
-        if self._scratch is None or self._scratch.n != self.p.n:
-            self._scratch = _Scratch(self.p.n, self.dim)
         self.wall["neighbors"] += time.perf_counter() - t0
 
-    def _ensure_neighbors(self, dt: float) -> None:
+    def _sync_neighbors(self) -> None:
+        """Driven: take the driver's list if it changed since the last view."""
+        sim = self.sim
+        if sim.nbrs_version != self._nbrs_version or self.nbrs is None:
+            t0 = time.perf_counter()
+            self._set_view(sim.nbrs)
+            self._nbrs_version = sim.nbrs_version
+            self.wall["neighbors"] += time.perf_counter() - t0
+        elif self._scratch is None or self._scratch.n != self.p.n:
+            self._scratch = _Scratch(self.p.n, self.dim)
+
+    def _after_drift(self) -> None:
+        """Make the list valid for the current (half-drifted) positions."""
+        if self.sim is not None:
+            self.sim.ensure_neighbors()
+            self._sync_neighbors()
+            return
         if self.params.skin <= 0:
             self.rebuild_neighbors()
             return
         t0 = time.perf_counter()
         lim = 0.5 * self.params.skin * self.R
-        d2 = _max_disp_sq(self.p.x, self._xref, self.p.v, 0.5 * dt, self.p.kind, self.period)
+        d2 = _max_disp_sq(self.p.x, self._xref, self.p.v, 0.0, self.p.kind, self.period)
         self.wall["neighbors"] += time.perf_counter() - t0
         if d2 > lim * lim:
             self.rebuild_neighbors()
+
+    def reorder(self, perm: np.ndarray) -> None:
+        """The particle fields were permuted by ``perm``: permute the mid-step state."""
+        s = self._scratch
+        if s is not None and s.n == perm.shape[0]:
+            s.v_n = np.ascontiguousarray(s.v_n[perm])
+            s.rho_n = np.ascontiguousarray(s.rho_n[perm])
 
     # -- forces ---------------------------------------------------------------------------
     def body_force(self, t: float) -> np.ndarray:
@@ -379,12 +424,15 @@ class FluidSolver:
             self._step(dt)
 
     def _step(self, dt: float) -> None:
-        self._ensure_neighbors(dt)
+        if self.sim is not None:
+            self._sync_neighbors()
         p, s = self.p, self._scratch
         t0 = time.perf_counter()
         _predict(p.x, p.v, p.rho, p.acc, p.drho, p.kind, dt, s.v_n, s.rho_n)
         self.wall["integrate"] += time.perf_counter() - t0
+        self._after_drift()
         self.evaluate(self.t + 0.5 * dt)
+        p, s = self.p, self._scratch
         t0 = time.perf_counter()
         _correct(p.x, p.v, p.rho, p.acc, p.drho, p.kind, dt, s.v_n, s.rho_n)
         self.wall["integrate"] += time.perf_counter() - t0
@@ -394,9 +442,14 @@ class FluidSolver:
     def check(self) -> None:
         """Stability guards (raise ``SimulationStopped`` with a clear message)."""
         t0 = time.perf_counter()
-        with _threads(self.nthreads):
-            self._check()
-        self.wall["guards"] += time.perf_counter() - t0
+        try:
+            with _threads(self.nthreads):
+                self._check()
+        except Exception as e:
+            self.guard_message = str(e)
+            raise
+        finally:
+            self.wall["guards"] += time.perf_counter() - t0
 
     def _check(self) -> None:
         p, pa = self.p, self.params
@@ -429,26 +482,69 @@ class FluidSolver:
         return self.p.f_fluid.sum(axis=0)
 
     def diagnostics(self) -> dict:
-        p = self.p
+        p, pa = self.p, self.params
         fl = p.kind == FLUID
+        speed = np.sqrt((p.v[fl] ** 2).sum(axis=1)) if fl.any() else np.zeros(1)
+        ratio = p.rho[fl] / pa.rho0 if fl.any() else np.ones(1)
+        finite = bool(np.isfinite(speed).all() and np.isfinite(ratio).all())
+        lims = self.dt_limits() if finite else {}
         return {
             "fluid_particles": int(fl.sum()),
             "steps": self.step_count,
             "neighbor_rebuilds": self.n_rebuilds,
             "renormalisation_fallbacks": self.last_fallbacks,
-            "max_speed": float(np.sqrt((p.v[fl] ** 2).sum(axis=1)).max()) if fl.any() else 0.0,
-            "rho_ratio_range": [float(p.rho[fl].min() / self.params.rho0),
-                                float(p.rho[fl].max() / self.params.rho0)] if fl.any() else [],
+            "max_speed": float(np.nanmax(speed)) if finite else None,
+            "max_speed_over_c0": float(np.nanmax(speed)) / pa.c0 if finite else None,
+            "rho_ratio_range": [float(np.nanmin(ratio)), float(np.nanmax(ratio))],
+            "dt_limits_s": {k: float(v) for k, v in lims.items()},
+            "guards": {
+                "status": "tripped" if self.guard_message else "ok",
+                "message": self.guard_message,
+                "max_speed_factor": pa.max_speed_factor,
+                "rho_ratio_band": list(pa.rho_ratio_band),
+            },
             "wall_s": dict(self.wall),
         }
+
+
+def fluid_materials(scene) -> list[str]:
+    """Names of the materials of the scene's fluid blocks (in scene order, unique)."""
+    return list(dict.fromkeys(b.material for b in scene.blocks if b.kind == "fluid"))
+
+
+def params_from_scene(scene) -> FluidParams:
+    """:class:`FluidParams` from the ``[fluid]`` section and the fluid materials.
+
+    rho0, c0 and sigma are shared by all fluid materials (the Tait EOS and the surface
+    tension use one value; the scene check enforces it); mu is per particle.
+    """
+    cfg = scene.fluid
+    mats = [scene.materials[m] for m in fluid_materials(scene)]
+    if not mats:
+        raise ValueError("fluid: the scene has no fluid block")
+    m0 = mats[0]
+    kw = {}
+    if cfg is not None:
+        names = FluidParams.__dataclass_fields__
+        kw = {k: cfg[k] for k in cfg if k in names}
+        kw["rho_ratio_band"] = tuple(cfg.rho_ratio_band)
+        kw["gravity"] = tuple(cfg.gravity)
+    kw["cfl"] = scene.time.cfl
+    kw["skin"] = 0.15 if scene.sph.skin is None else scene.sph.skin
+    kw["sort_every"] = scene.sph.sort_every
+    kw["rho0"] = m0.rho0
+    kw["c0"] = m0.c0
+    kw["mu"] = 0.0 if (cfg is not None and cfg.viscosity == "none") else (m0.mu or 0.0)
+    return FluidParams(**kw)
 
 
 class FluidModule(PhysicsModule):
     """The ``fluid`` physics module: a :class:`FluidSolver` driven by the simulation.
 
-    Reads ``scene.fluid`` (a :class:`FluidParams` or a record with the same attribute
-    names) when present.  The solver keeps its own Verlet neighbour list (radius R (1 +
-    skin)) and may cell-sort the particles when it rebuilds it.
+    Parameters come from the ``[fluid]`` section and the fluid materials
+    (:func:`params_from_scene`), or from ``scene.fluid`` when it is a
+    :class:`FluidParams`.  The solver uses the driver's shared Verlet-skin list and
+    permutes its mid-step state in :meth:`reorder` when the driver cell-sorts.
     """
 
     name = "fluid"
@@ -457,11 +553,7 @@ class FluidModule(PhysicsModule):
     def __init__(self, scene):
         super().__init__(scene)
         cfg = getattr(scene, "fluid", None)
-        if cfg is None or isinstance(cfg, FluidParams):
-            self.params = cfg or FluidParams()
-        else:
-            names = FluidParams.__dataclass_fields__
-            self.params = FluidParams(**{k: getattr(cfg, k) for k in names if hasattr(cfg, k)})
+        self.params = cfg if isinstance(cfg, FluidParams) else params_from_scene(scene)
         self.solver = None
 
     def fields(self):
@@ -469,8 +561,18 @@ class FluidModule(PhysicsModule):
         return {k: (np.float64, dim if nc == "dim" else nc) for k, nc in FIELDS.items()}
 
     def init(self, sim) -> None:
-        self.solver = FluidSolver(sim.particles, sim.R, sim.lo, sim.hi, sim.period,
-                                  self.params, kernel=sim.scene.sph.kernel)
+        ps = sim.particles
+        fl = ps.kind == FLUID
+        names = list(sim.scene.materials)
+        if not isinstance(getattr(sim.scene, "fluid", None), FluidParams):
+            visc = sim.scene.fluid is None or sim.scene.fluid.viscosity != "none"
+            for name in fluid_materials(sim.scene):
+                sel = fl & (ps.material == names.index(name))
+                ps.mu[sel] = (sim.scene.materials[name].mu or 0.0) if visc else 0.0
+        self.solver = FluidSolver(ps, sim.R, sim.lo, sim.hi, sim.period, self.params,
+                                  kernel=sim.scene.sph.kernel, sim=sim)
+        self.solver.t = sim.t  # a resumed run keeps its body-force ramp
+        self.solver.step_count = sim.step_count
 
     def dt_limits(self, sim) -> dict[str, float]:
         return self.solver.dt_limits()
@@ -478,6 +580,9 @@ class FluidModule(PhysicsModule):
     def step(self, sim, dt: float) -> None:
         self.solver.step(dt)
         self.solver.check()
+
+    def reorder(self, sim, perm) -> None:
+        self.solver.reorder(perm)
 
     def diagnostics(self, sim) -> dict:
         return self.solver.diagnostics()

@@ -1,0 +1,88 @@
+"""The ``[fluid]`` scene section (declared once: validation, defaults and docs/scenes.md).
+
+Pure declarations: importing this module compiles nothing.  Material properties of the
+fluid (``rho0``, ``c0``, ``mu``, ``sigma``) come from the ``[materials.<name>]`` tables of
+the fluid blocks; this section holds the numerical model.
+"""
+
+from __future__ import annotations
+
+from sphfem.schema import VECTOR, Param, Section
+
+
+def _fluid_materials(ctx):
+    blocks = ctx.core.get("blocks", ())
+    mats = ctx.core.get("materials", {})
+    names = list(dict.fromkeys(b.material for b in blocks if b.kind == "fluid"))
+    return names, mats
+
+
+def _check(rec, ctx, path):
+    lo, hi = rec.rho_ratio_band
+    if not 0.0 < lo < 1.0 < hi:
+        ctx.error(f"{path}.rho_ratio_band", f"expected 0 < lo < 1 < hi, got [{lo:g}, {hi:g}]")
+    names, mats = _fluid_materials(ctx)
+    if not names:
+        ctx.error("physics.modules", "the fluid module needs at least one block of kind "
+                                     "\"fluid\"")
+    first = mats[names[0]]
+    for name in names:
+        m = mats[name]
+        where = f"materials.{name}"
+        if m.c0 is None:
+            ctx.error(f"{where}.c0", "missing: a fluid material needs the artificial speed of "
+                                     "sound c0 [m/s] (>= 10 x the largest expected speed)")
+        if rec.viscosity == "laminar" and m.mu is None:
+            ctx.error(f"{where}.mu", "missing: viscosity = \"laminar\" needs the dynamic "
+                                     "viscosity mu [Pa s] (or set [fluid] viscosity = \"none\")")
+        for key in ("rho0", "c0"):
+            if m[key] != first[key]:
+                ctx.error(f"{where}.{key}", f"all fluid materials must share {key} (the Tait "
+                          f"equation of state uses one value): {m[key]:g} != "
+                          f"{first[key]:g} of materials.{names[0]}")
+
+
+FLUID = Section("fluid", (
+    Param("gamma", float, 7.0, positive=True,
+          doc="Tait exponent of p = rho0 c0^2/gamma ((rho/rho0)^gamma - 1)"),
+    Param("delta", float, 0.1, ge=0.0,
+          doc="delta-SPH density diffusion coefficient (Antuono et al. 2010 with the "
+              "renormalised density gradient; 0 = off)"),
+    Param("viscosity", str, "laminar", choices=("laminar", "none"),
+          doc="laminar: Morris et al. (1997) form (thesis eq. 2.21) with each fluid "
+              "particle's material mu; none: inviscid (only the artificial alpha term)"),
+    Param("alpha", float, 0.0, ge=0.0,
+          doc="artificial viscosity coefficient (Monaghan 1992 in the always-on form of "
+              "Marrone et al. 2011, pair coefficient alpha h c0, h = R/2; 0 = off, "
+              "0.01-0.05 for violent free-surface flows)"),
+    Param("gravity", VECTOR, lambda dim: (0.0,) * dim, unit="m/s^2", default_doc="zeros",
+          quantity="acceleration", doc="body force per unit mass"),
+    Param("gravity_ramp", float, 0.0, unit="s", ge=0.0, quantity="time",
+          doc="time over which the body force rises smoothly from 0 (half a cosine "
+              "period); lets a column at rest settle without exciting acoustic modes"),
+    Param("visc_cfl", float, 0.125, gt=0.0, le=1.0,
+          doc="viscous limit dt <= visc_cfl h^2 min(rho/mu) (the acoustic limit "
+              "dt <= cfl h/(c0 + |v|max) uses `[time] cfl`)"),
+    Param("force_cfl", float, 0.25, gt=0.0, le=1.0,
+          doc="force limit dt <= force_cfl sqrt(h/|a|max)"),
+    Param("eps_visc", float, 1e-3, positive=True,
+          doc="regulariser of the viscous term, as a fraction of h^2"),
+    Param("cond_max", float, 1e8, gt=1.0,
+          doc="largest accepted condition number of the renormalisation matrix (beyond: "
+              "plain density gradient, counted as a fallback)"),
+    Param("max_speed_factor", float, 1.0, positive=True,
+          doc="guard: stop when a fluid speed exceeds this multiple of c0"),
+    Param("rho_ratio_band", VECTOR, (0.8, 1.25), length=2, positive=True,
+          doc="guard: stop when rho/rho0 of a fluid particle leaves [lo, hi]"),
+    Param("threads", int, 0, ge=0,
+          doc="numba threads of the fluid passes (0: one below 20000 particles, else "
+              "numba's default)"),
+), check=_check, doc=(
+    "Weakly compressible delta-SPH fluid (Tait EOS, symmetric pressure gradient, Morris "
+    "viscosity, delta-SPH continuity, symplectic position-Verlet step) with Adami et al. "
+    "(2012) walls: blocks of kind `\"wall\"` are the walls (fixed; their `rho` and `p` are "
+    "overwritten by the extrapolated wall state), `\"fluid\"` blocks the fluid; other kinds "
+    "do not interact with the fluid.  Fluid materials need `c0` and (laminar) `mu` and must "
+    "share `rho0` and `c0`.  The time step is the smallest of the acoustic, viscous and "
+    "force limits (each reported in summary.json), and guards stop the run on NaN/Inf, "
+    "speed, density ratio or particles leaving the domain."))
