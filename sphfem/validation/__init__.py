@@ -19,7 +19,8 @@ import numpy as np
 
 CASES: dict[str, Callable[[bool], CaseResult]] = {}
 _CASE_MODULES = ("sphfem.validation.operators", "sphfem.validation.heat",
-                 "sphfem.validation.fluid", "sphfem.validation.fem")
+                 "sphfem.validation.fluid", "sphfem.validation.fem",
+                 "sphfem.validation.solid")
 
 
 @dataclass

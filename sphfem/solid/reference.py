@@ -1,0 +1,125 @@
+"""Reference configuration of a total-Lagrangian SPH body: neighbours, kernel gradients, B0.
+
+The neighbour list is built once on the reference positions X and kept for the whole run
+(Park 2019, fig. 2.16: initial neighbours may leave the support in the current
+configuration).  Per neighbour pair (i, j) with R_ij = X_j - X_i (minimum image on periodic
+axes) this module stores
+
+    gW_ij = grad_i W(|X_i - X_j|) = -W'(r) R_ij / r      (points from i towards j)
+    W_ij  = W(|R_ij|)                                        (used by the hourglass control)
+
+and per particle the reference correction tensor (Park eq. 2.117, Johnson & Beissel 1996)
+
+    B0_i = [ sum_j V0_j R_ij (x) gW_ij ]^-1 .
+
+With gW_ij parallel to R_ij the moment matrix is symmetric, so B0_i is symmetric.  Where it
+is singular or worse conditioned than ``cond_max`` (isolated particles, thin strands) the
+particle falls back to B0_i = I (plain gradient) and ``ok[i]`` is False; the count goes into
+the diagnostics.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from numba import njit
+
+from sphfem import kernels
+from sphfem.neighbors import build_neighbor_list, min_image
+from sphfem.operators import COND_MAX, FASTMATH, invert_small
+
+
+@njit(cache=True, fastmath=FASTMATH)
+def reference_pairs(X, vol, offsets, indices, R, sigma, kind, period, cond_max):
+    """Pair gradients gW (npairs, dim), pair kernel values W (npairs,), B0 (n, dim, dim) and
+    the correction mask ok (n,) on the reference positions X (n, dim)."""
+    n, dim = X.shape
+    npair = indices.shape[0]
+    gw = np.zeros((npair, dim))
+    w = np.zeros(npair)
+    B = np.zeros((n, dim, dim))
+    ok = np.zeros(n, dtype=np.bool_)
+    r = np.empty(dim)
+    M = np.empty((dim, dim))
+    Bi = np.empty((dim, dim))
+    for i in range(n):
+        M[:, :] = 0.0
+        for jj in range(offsets[i], offsets[i + 1]):
+            j = indices[jj]
+            d2 = 0.0
+            for k in range(dim):
+                r[k] = min_image(X[j, k] - X[i, k], period[k])
+                d2 += r[k] * r[k]
+            d = np.sqrt(d2)
+            if d == 0.0:
+                continue
+            w[jj] = sigma * kernels.kernel_f(d / R, kind)
+            s = -sigma * kernels.kernel_dfdq(d / R, kind) / (R * d)
+            for k in range(dim):
+                gw[jj, k] = s * r[k]
+            for p in range(dim):
+                for q in range(dim):
+                    M[p, q] += vol[j] * r[p] * gw[jj, q]
+        cond = invert_small(M, Bi)
+        if cond <= cond_max:
+            ok[i] = True
+            B[i] = Bi
+        else:
+            for p in range(dim):
+                B[i, p, p] = 1.0
+    return gw, w, B, ok
+
+
+@dataclass
+class ReferenceConfig:
+    """Everything about the undeformed body that the run keeps: positions ``X`` (n, dim),
+    volumes ``vol`` (V0), CSR neighbours, pair arrays ``gw``/``w``, ``B`` and ``ok``."""
+
+    X: np.ndarray
+    vol: np.ndarray
+    offsets: np.ndarray
+    indices: np.ndarray
+    gw: np.ndarray
+    w: np.ndarray
+    B: np.ndarray
+    ok: np.ndarray
+    R: float
+    period: np.ndarray
+
+    @property
+    def n(self) -> int:
+        return self.X.shape[0]
+
+    @property
+    def dim(self) -> int:
+        return self.X.shape[1]
+
+    @property
+    def fallbacks(self) -> int:
+        return int((~self.ok).sum())
+
+
+def build_reference(X, vol, R: float, kernel: str = "wendland_c2", period=None,
+                    cond_max: float = COND_MAX) -> ReferenceConfig:
+    """Neighbour list within the support radius ``R`` of the reference positions and the
+    pair gradients / correction tensors of :func:`reference_pairs`."""
+    X = np.ascontiguousarray(np.asarray(X, dtype=np.float64))
+    if X.ndim != 2 or X.shape[1] not in (2, 3):
+        raise ValueError(f"TL-SPH positions must have shape (n, 2) or (n, 3), got {X.shape}")
+    n, dim = X.shape
+    vol = np.ascontiguousarray(np.broadcast_to(np.asarray(vol, float), (n,)))
+    period = np.zeros(dim) if period is None else np.asarray(period, float)
+    kind = kernels.kernel_code(kernel)
+    sigma = kernels.kernel_sigma(kind, dim, R)
+    lo = X.min(axis=0) - R
+    hi = X.max(axis=0) + R
+    if np.any(period > 0):
+        lo = np.where(period > 0, X.min(axis=0), lo)
+        hi = np.where(period > 0, lo + period, hi)
+    nl = build_neighbor_list(X, R, lo, hi, period)
+    offsets = np.ascontiguousarray(nl.offsets)
+    indices = np.ascontiguousarray(nl.indices)
+    gw, w, B, ok = reference_pairs(X, vol, offsets, indices, R, sigma, kind, period,
+                                   cond_max)
+    return ReferenceConfig(X, vol, offsets, indices, gw, w, B, ok, float(R), period)

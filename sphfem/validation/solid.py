@@ -1,0 +1,223 @@
+"""TL-SPH thermo-elastic solid validation (issue 7): ``danilovskaya``, ``bilayer``,
+``sph-vs-fem``, ``tlsph-stability``.  All cases are two-dimensional (plane strain), quick
+and full alike; see each case's docstring for the set-up and the exact solution.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+
+from sphfem.validation import CaseResult, Criterion, Run, Timer, register, relative_errors
+
+# ---------------------------------------------------------------------------------------
+# Danilovskaya: constrained rod, top suddenly heated
+# ---------------------------------------------------------------------------------------
+DAN = dict(h=1.0, rho=1.0, c=1.0, k=1.0, lam=500.0, mu=250.0, alpha=1e-3, theta0=1.0,
+           T0=0.0)
+DAN_TIMES = (0.02, 0.05, 0.1, 0.2, 0.4, 0.8)
+
+
+def _dan_consts():
+    p = DAN
+    M = p["lam"] + 2 * p["mu"]
+    beta = (3 * p["lam"] + 2 * p["mu"]) * p["alpha"]
+    kappa = p["k"] / (p["rho"] * p["c"])
+    return M, beta, kappa
+
+
+def danilovskaya_exact(z, t):
+    """Temperature rise and displacement at heights z (from the clamped base) and time t:
+    numerical inverse (Talbot, mpmath) of the Laplace-domain solution (Park 2019, 2.5.7)
+
+        theta(s) = theta0/s cosh(eta z)/cosh(eta h),
+        u(s) = theta0/(eta s) (beta/M) sinh(eta z)/cosh(eta h),   eta = sqrt(s/kappa),
+
+    M = lam + 2 mu, beta = (3 lam + 2 mu) alpha (uniaxial strain; quasi-static)."""
+    import mpmath as mp
+
+    M, beta, kappa = _dan_consts()
+    h, th0 = DAN["h"], DAN["theta0"]
+    z = np.atleast_1d(np.asarray(z, float))
+    T = np.empty(z.size)
+    U = np.empty(z.size)
+    for q, zz in enumerate(z):
+        def ft(s, zz=zz):
+            e = mp.sqrt(s / kappa)
+            return th0 / s * mp.cosh(e * zz) / mp.cosh(e * h)
+
+        def fu(s, zz=zz):
+            e = mp.sqrt(s / kappa)
+            return th0 / (e * s) * (beta / M) * mp.sinh(e * zz) / mp.cosh(e * h)
+
+        T[q] = float(mp.invertlaplace(ft, t, method="talbot"))
+        U[q] = float(mp.invertlaplace(fu, t, method="talbot"))
+    return T, U
+
+
+def _dan_tlsph(dx: float, times=DAN_TIMES):
+    """Heat (Crank-Nicolson on the reference particles, ghosts) + quasi-static TL-SPH
+    (dynamic relaxation at each sample time).  Periodic in x (the rollers of the lateral
+    faces: uniaxial strain), three clamped rows below the base z = 0."""
+    from sphfem.heat.ghosts import box_faces
+    from sphfem.solid.body import SolidBody
+    from sphfem.solid.integrate import relax
+    from sphfem.solid.lattice import box_lattice
+    from sphfem.solid.thermal import SolidHeat
+
+    p = DAN
+    h = p["h"]
+    width = 8 * dx
+    X = box_lattice((0.0, -3 * dx), (width, h), dx)
+    base = X[:, 1] < 0
+    body = SolidBody(X, dx * dx, p["rho"], p["lam"], p["mu"], p["alpha"], dx,
+                     theta0=p["T0"], period=(width, 0.0))
+    body.clamp(base)
+    faces = box_faces((0.0, 0.0), (width, h), {"ymax": ("dirichlet", p["T0"] + p["theta0"])})
+    heat = SolidHeat(body, p["c"], p["k"], faces, active=~base, T_init=p["T0"],
+                     implicit=True, theta=0.5, origin=X[~base][0])
+    col = np.flatnonzero((~base) & (np.abs(X[:, 0] - X[0, 0]) < 1e-12))
+    top = np.flatnonzero((~base) & (X[:, 1] > h - dx))
+    t = 0.0
+    dt = min(0.25 * dx, 0.01)
+    out_T, out_u, relax_steps = [], [], 0
+    for ts in times:
+        n = max(1, int(math.ceil((ts - t) / dt - 1e-9)))
+        for _ in range(n):
+            heat.step((ts - t) / n)
+        t = ts
+        info = relax(body, tol=1e-7)
+        relax_steps += info["steps"]
+        out_T.append(body.theta[col].copy())
+        out_u.append(float(body.u[top, 1].mean()))
+    z = X[col, 1]
+    return z, np.array(out_T), np.array(out_u), X[top[0], 1], body.n, relax_steps
+
+
+def _dan_fem(nel: int, times=DAN_TIMES):
+    """Q1 transient heat (Crank-Nicolson, two backward-Euler half steps first) + FEM
+    quasi-static thermo-elasticity (FEMSubstrate, rollers on the sides, clamped base) on a
+    2 x nel quad mesh of the rod."""
+    from scipy.sparse.linalg import splu
+    from skfem import Basis, BilinearForm, ElementQuad1, MeshQuad1
+    from skfem.helpers import dot, grad
+
+    from sphfem.fem.substrate import FEMSubstrate
+
+    p = DAN
+    h = p["h"]
+    w = 2.0 * h / nel
+    mesh = MeshQuad1.init_tensor(np.linspace(0, w, 3), np.linspace(0, h, nel + 1))
+    mesh = mesh.with_boundaries({"left": lambda x: np.isclose(x[0], 0.0),
+                                 "right": lambda x: np.isclose(x[0], w),
+                                 "bottom": lambda x: np.isclose(x[1], 0.0),
+                                 "top": lambda x: np.isclose(x[1], h)})
+    E = p["mu"] * (3 * p["lam"] + 2 * p["mu"]) / (p["lam"] + p["mu"])
+    nu = p["lam"] / (2 * (p["lam"] + p["mu"]))
+    sub = FEMSubstrate(mesh, E, nu, p["alpha"], T0=p["T0"], clamps=["bottom"],
+                       rollers={"left": "x", "right": "x"})
+    basis = Basis(mesh, ElementQuad1())
+
+    @BilinearForm
+    def lap(u, v, _):
+        return dot(grad(u), grad(v))
+
+    @BilinearForm
+    def mass(u, v, _):
+        return u * v
+
+    kappa = p["k"] / (p["rho"] * p["c"])
+    K = kappa * lap.assemble(basis)
+    Mm = mass.assemble(basis)
+    D = basis.get_dofs("top").all()
+    I = np.setdiff1d(np.arange(basis.N), D)
+    T = np.zeros(basis.N)
+    T[D] = p["theta0"]
+    dt = min(0.25 * h / nel, 0.01)
+    lus = {}
+
+    def solve_step(T, dt, th):
+        key = (dt, th)
+        if key not in lus:
+            A = (Mm + th * dt * K).tocsr()
+            lus[key] = splu(A[I][:, I].tocsc())
+        rhs = (Mm - (1 - th) * dt * K) @ T - (Mm + th * dt * K)[:, D] @ T[D]
+        T = T.copy()
+        T[I] = lus[key].solve(rhs[I])
+        return T
+
+    t = 0.0
+    first = True
+    out_T, out_u = [], []
+    xc = mesh.p[0] == 0.0
+    order = np.argsort(mesh.p[1][xc])
+    tipn = np.flatnonzero(np.isclose(mesh.p[1], h))
+    for ts in times:
+        n = max(1, int(math.ceil((ts - t) / dt - 1e-9)))
+        for _ in range(n):
+            d = (ts - t) / n
+            if first:
+                T = solve_step(solve_step(T, 0.5 * d, 1.0), 0.5 * d, 1.0)
+                first = False
+            else:
+                T = solve_step(T, d, 0.5)
+        t = ts
+        r = sub.solve(dT_nodal=T - 0.0)
+        out_T.append(T[xc][order])
+        out_u.append(float(r.u[tipn, 1].mean()))
+    return mesh.p[1][xc][order], np.array(out_T), np.array(out_u), h, sub.n_dofs
+
+
+@register("danilovskaya")
+def danilovskaya(quick: bool) -> CaseResult:
+    """Danilovskaya problem (2D plane strain, uniaxial strain column): rod of height 1,
+    base clamped, sides on rollers, insulated except the top, which is suddenly held at
+    theta0 above the initial temperature.  Tip displacement u(h, t) and the temperature
+    profile at t in DAN_TIMES against the Talbot inverse of the Laplace-domain solution;
+    TL-SPH (heat via ghosts + quasi-static relaxation) and FEM (Q1 transient heat +
+    FEMSubstrate) at several resolutions, with wall seconds."""
+    sph_dx = (1 / 20, 1 / 40) if quick else (1 / 20, 1 / 40, 1 / 80)
+    fem_n = (20, 40) if quick else (20, 40, 80)
+    runs = []
+    worst = {}
+    for dx in sph_dx:
+        with Timer() as tm:
+            z, Ts, us, ztip, n, steps = _dan_tlsph(dx)
+        Te = np.array([danilovskaya_exact(z, t)[0] for t in DAN_TIMES])
+        ue = np.array([danilovskaya_exact([ztip], t)[1][0] for t in DAN_TIMES])
+        el2, eli = relative_errors(us, ue)
+        tl2, tli = relative_errors(Ts, Te)
+        runs.append(Run("tlsph tip u", dx, n, el2, eli, tm.s,
+                        {"T_err_l2": tl2, "T_err_linf": tli, "relax_steps": steps}))
+        worst["tlsph"] = (el2, tl2)
+    for nel in fem_n:
+        with Timer() as tm:
+            z, Ts, us, ztip, ndof = _dan_fem(nel)
+        Te = np.array([danilovskaya_exact(z, t)[0] for t in DAN_TIMES])
+        ue = np.array([danilovskaya_exact([ztip], t)[1][0] for t in DAN_TIMES])
+        el2, eli = relative_errors(us, ue)
+        tl2, tli = relative_errors(Ts, Te)
+        runs.append(Run("fem tip u", 1.0 / nel, ndof, el2, eli, tm.s,
+                        {"T_err_l2": tl2, "T_err_linf": tli}))
+        worst["fem"] = (el2, tl2)
+    criteria = {
+        "tlsph_tip": Criterion("TL-SPH tip displacement rel. L2 error (finest)",
+                               worst["tlsph"][0], 0.05),
+        "tlsph_T": Criterion("TL-SPH temperature rel. L2 error (finest)", worst["tlsph"][1],
+                             0.05),
+        "fem_tip": Criterion("FEM tip displacement rel. L2 error (finest)", worst["fem"][0],
+                             0.05),
+        "fem_T": Criterion("FEM temperature rel. L2 error (finest)", worst["fem"][1], 0.05),
+    }
+    p = DAN
+    notes = [f"2D plane strain; h = {p['h']}, kappa = {p['k'] / (p['rho'] * p['c'])}, "
+             f"lam = {p['lam']}, mu = {p['mu']}, alpha = {p['alpha']}, theta0 = "
+             f"{p['theta0']}; times {DAN_TIMES}; errors over the time series (tip) and the "
+             "profiles (T); exact by Talbot inversion (mpmath)",
+             "TL-SPH: periodic in x (= rollers), 3 clamped rows below the base, heat by "
+             "Crank-Nicolson with antisymmetric Dirichlet ghosts, mechanics quasi-static "
+             "(dynamic relaxation to 1e-7 at each sample time); wall s includes numba "
+             "compilation on the first run"]
+    return CaseResult("danilovskaya", runs, criteria, notes, resolution_label="dx",
+                      extra_columns={"T_err_l2": "T err L2", "relax_steps": "DR steps"})
