@@ -20,7 +20,7 @@ import numpy as np
 CASES: dict[str, Callable[[bool], CaseResult]] = {}
 _CASE_MODULES = ("sphfem.validation.operators", "sphfem.validation.heat",
                  "sphfem.validation.fluid", "sphfem.validation.fem",
-                 "sphfem.validation.solid")
+                 "sphfem.validation.solid", "sphfem.validation.coupling")
 
 
 @dataclass

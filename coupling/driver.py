@@ -1,0 +1,384 @@
+"""One-way staggered SPH -> substrate coupling and the ``coupling`` physics module.
+
+Park (2019) sec. 2.4.4 (figure 2.3): the SPH side (fluid + heat) advances with its own
+explicit step; the substrate is quasi-static (its acoustic time step would be ~1000x
+smaller), so every ``k`` SPH steps the driver
+
+1. reads the sensor particles (:class:`coupling.sensors.SensorSet`): the force the fluid
+   exerts on the substrate's surface layers and the SPH solid region's temperatures;
+2. hands them to the substrate backend (:mod:`coupling.backends`; FEM: f = P^T F on the
+   coupled surface, temperatures mapped to the nodes, :mod:`coupling.transfer`);
+3. solves once (FEM: one back-substitution with the factorised K) and records the stress at
+   the probe points, the peak von Mises stress (value, place, time), the volume-averaged
+   stress and the bookkeeping of the hand-over (force and moment before / after the
+   transfer, heat given to the solid).
+
+Nothing flows back (one-way): the substrate's deformation does not move the wall particles.
+
+Default k (:func:`default_every_k`): the loads change on two time scales, the time the
+fluid needs to move half a particle spacing, 0.5 dx / U (U = the largest of the fluid's
+initial speed and c0 / 10, the speed the weakly compressible model is designed for), and
+the time heat needs to diffuse half a spacing into the substrate, dx^2 / (4 kappa_s);
+k = max(1, floor(min of the two / dt)) with dt the first SPH step.  The last step of a run
+is always coupled.
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+import logging
+import math
+import time
+from pathlib import Path
+
+import numpy as np
+
+from coupling.sensors import SensorSet, Surface
+from sphfem.particles import FLUID
+from sphfem.physics import PhysicsModule
+
+logger = logging.getLogger(__name__)
+
+_COMPONENTS = (("xx", 0, 0), ("yy", 1, 1), ("zz", 2, 2), ("xy", 0, 1), ("yz", 1, 2),
+               ("xz", 0, 2))
+
+
+def default_every_k(dx: float, dt: float, U: float | None = None,
+                    kappa: float | None = None) -> int:
+    """k = max(1, floor(min(0.5 dx / U, dx^2 / (4 kappa)) / dt)) (module docstring)."""
+    scales = []
+    if U is not None and U > 0:
+        scales.append(0.5 * dx / U)
+    if kappa is not None and kappa > 0:
+        scales.append(0.25 * dx * dx / kappa)
+    if not scales or not dt > 0:
+        return 1
+    return max(1, int(math.floor(min(scales) / dt * (1 + 1e-12))))
+
+
+class HeatLedger:
+    """Heat given to the SPH solid region against the heat the fluid lost.
+
+    Q_solid = sum_region m c (T - T_init),  Q_fluid = -sum_fluid m c (T - T_init);
+    with a conservative conduction operator (Cleary) in an insulated box the two agree to
+    round-off: ``residual_rel`` = (Q_solid - Q_fluid) / max(|Q_fluid|, |Q_solid|).
+    """
+
+    def __init__(self, ps, region: np.ndarray):
+        self.e_region0 = self._energy(ps, region)
+        self.e_fluid0 = self._energy(ps, ps.kind == FLUID)
+        self.e_other0 = self._energy(ps, ~region & (ps.kind != FLUID) & (ps.kind != 3))
+
+    @staticmethod
+    def _energy(ps, mask) -> float:
+        return float(np.sum(ps.m[mask] * ps.c_heat[mask] * ps.T[mask]))
+
+    def figures(self, ps, region: np.ndarray) -> dict:
+        q_s = self._energy(ps, region) - self.e_region0
+        q_f = self.e_fluid0 - self._energy(ps, ps.kind == FLUID)
+        q_o = self._energy(ps, ~region & (ps.kind != FLUID) & (ps.kind != 3)) - self.e_other0
+        scale = max(abs(q_s), abs(q_f), 1e-300)
+        return {"heat_to_solid_J": q_s, "heat_lost_by_fluid_J": q_f,
+                "heat_to_other_particles_J": q_o,
+                "residual_rel": (q_s + q_o - q_f) / scale}
+
+
+class CouplingDriver:
+    """Sensors -> backend every ``every_k`` steps, with the records (no SPH knowledge).
+
+    ``probes`` (n, dim) [m]; ``every_k`` None: decided by the caller before the first
+    :meth:`maybe_couple` (see :func:`default_every_k`).
+    """
+
+    def __init__(self, sensors: SensorSet, backend, probes=None, every_k: int | None = None,
+                 vtu_every: int = 10):
+        self.sensors = sensors
+        self.backend = backend
+        self.probes = None if probes is None else np.atleast_2d(np.asarray(probes, float))
+        self.every_k = every_k
+        self.vtu_every = int(vtu_every)
+        self.history: list[dict] = []
+        self.peak = {"von_mises": -1.0, "location": None, "t": None}
+        self.max_force_residual = 0.0
+        self.max_moment_residual = 0.0
+        self.timings = {"sensors": 0.0, "backend": 0.0, "records": 0.0}
+        self.last = None
+        self.n_written = 0
+
+    def maybe_couple(self, ps, t: float, step: int, last: bool = False, folder=None):
+        """Couple when ``step`` is a multiple of ``every_k`` or ``last``; return the record."""
+        k = self.every_k or 1
+        if step % k == 0 or last:
+            return self.couple(ps, t, step, folder, last=last)
+        return None
+
+    def couple(self, ps, t: float, step: int = 0, folder=None, last: bool = False) -> dict:
+        t0 = time.perf_counter()
+        r = self.sensors.read(ps, t)
+        t1 = time.perf_counter()
+        book = self.backend.apply(r.x, r.force, r.x_region, r.T_region, r.vol_region)
+        res = self.backend.solve(t)
+        self.last = res
+        t2 = time.perf_counter()
+        rec = self._record(r, book, res, t, step)
+        self.history.append(rec)
+        if folder is not None:
+            folder = Path(folder)
+            n = len(self.history) - 1
+            if last or (self.vtu_every and n % self.vtu_every == 0):
+                self.backend.write(t, folder)
+                self.n_written += 1
+            self.write_history(folder)
+        self.timings["sensors"] += t1 - t0
+        self.timings["backend"] += t2 - t1
+        self.timings["records"] += time.perf_counter() - t2
+        return rec
+
+    def _record(self, r, book, res, t, step) -> dict:
+        scale_f = max(float(np.abs(r.force).sum()), 1e-300)
+        fres = float(np.abs(book["force_out"] - book["force_in"]).max()) / scale_f
+        lever = max(float(np.ptp(r.x, axis=0).max()) if len(r.x) else 0.0, 1e-300)
+        mres = float(np.abs(book["moment_out"] - book["moment_in"]).max()) / (scale_f * lever)
+        self.max_force_residual = max(self.max_force_residual, fres)
+        self.max_moment_residual = max(self.max_moment_residual, mres)
+        vm, where = res.peak_von_mises()
+        if vm > self.peak["von_mises"]:
+            self.peak = {"von_mises": vm, "location": where.tolist(), "t": t}
+        S = res.mean_stress()
+        rec = {"t": t, "step": step, "sensors": int(len(r.x)),
+               "force_sensors": r.total_force.tolist(),
+               "force_load": np.asarray(book["force_out"]).tolist(),
+               "force_residual_rel": fres, "moment_residual_rel": mres,
+               "unassigned_force": r.unassigned_force.tolist(),
+               "clipped_sensors": book["clipped"],
+               "peak_von_mises": vm, "peak_location": where.tolist(),
+               "mean_stress": {c: float(S[i, j]) for c, i, j in _COMPONENTS}}
+        if r.T_region is not None and r.T_region.size:
+            rec["T_region_max"] = float(r.T_region.max())
+        if self.probes is not None:
+            p = res.probe(self.probes)
+            rec["probes"] = [{**{c: float(p["stress"][k, i, j]) for c, i, j in _COMPONENTS},
+                              "von_mises": float(p["von_mises"][k]), "T": float(p["T"][k])}
+                             for k in range(len(self.probes))]
+        return rec
+
+    # -- outputs -----------------------------------------------------------------------
+    def csv_text(self) -> str:
+        buf = io.StringIO()
+        w = csv.writer(buf)
+        npb = 0 if self.probes is None else len(self.probes)
+        head = ["t", "step", "peak_von_mises"] + [f"mean_s{c}" for c, _, _ in _COMPONENTS]
+        for k in range(npb):
+            head += [f"p{k}_s{c}" for c, _, _ in _COMPONENTS] + [f"p{k}_von_mises", f"p{k}_T"]
+        w.writerow(head)
+        for h in self.history:
+            row = [repr(h["t"]), h["step"], repr(h["peak_von_mises"])]
+            row += [repr(h["mean_stress"][c]) for c, _, _ in _COMPONENTS]
+            for p in h.get("probes", []):
+                row += [repr(p[c]) for c, _, _ in _COMPONENTS] + [repr(p["von_mises"]),
+                                                                 repr(p["T"])]
+            w.writerow(row)
+        return buf.getvalue()
+
+    def write_history(self, folder) -> None:
+        from sphfem.output import atomic_write_text, write_json
+
+        folder = Path(folder)
+        folder.mkdir(parents=True, exist_ok=True)
+        atomic_write_text(folder / "probes.csv", self.csv_text())
+        write_json(folder / "history.json", {
+            "probes": None if self.probes is None else self.probes.tolist(),
+            "every_k_steps": self.every_k, "history": self.history})
+
+    def summary(self) -> dict:
+        out = {"every_k_steps": self.every_k, "solves": len(self.history),
+               "vtu_written": self.n_written,
+               "peak_von_mises_Pa": self.peak["von_mises"] if self.history else None,
+               "peak_von_mises_location_m": self.peak["location"],
+               "peak_von_mises_t_s": self.peak["t"],
+               "force_residual_rel_max": self.max_force_residual,
+               "moment_residual_rel_max": self.max_moment_residual,
+               "wall_s": dict(self.timings),
+               "backend": self.backend.diagnostics()}
+        if self.history:
+            h = self.history[-1]
+            out["last"] = {k: h[k] for k in ("t", "force_sensors", "force_load",
+                                             "unassigned_force", "mean_stress") if k in h}
+            if "probes" in h:
+                out["probes_m"] = self.probes.tolist()
+                out["last"]["probes"] = h["probes"]
+        return out
+
+
+# --------------------------------------------------------------------------------------
+# the physics module
+
+
+def build_substrate(scene, cfg, region_lo, region_hi, T0: float):
+    """The :class:`sphfem.fem.FEMSubstrate` of a ``[coupling]`` section."""
+    from sphfem.fem import FEMSubstrate, substrate_block, substrate_rect
+
+    mat = scene.materials[cfg.material]
+    alpha = mat.alpha or 0.0
+    dim = scene.dim
+    if cfg.mesh_file is not None:
+        path = Path(cfg.mesh_file)
+        if not path.is_absolute() and scene.source and not scene.source.startswith("<"):
+            path = Path(scene.source).resolve().parent / path
+        mesh = path
+    else:
+        m = cfg["mesh"]
+        lo = np.array(m.lo if m.lo is not None else region_lo, float)
+        hi = np.array(m.hi if m.hi is not None else region_hi, float)
+        h_fine = m.h_fine if m.h_fine is not None else 2.0 * scene.sph.dx
+        h_coarse = m.h_coarse if m.h_coarse is not None else 8.0 * h_fine
+        rc = np.array(region_lo, float) * 0.5 + np.array(region_hi, float) * 0.5
+        rc[-1] = region_hi[-1]
+        center = tuple(m.refine_center) if m.refine_center is not None else tuple(rc)
+        lat = np.subtract(region_hi, region_lo)[:-1]
+        radius = m.refine_radius if m.refine_radius is not None else 0.5 * float(lat.max())
+        kw = dict(size=tuple(hi - lo), origin=tuple(lo), h_fine=h_fine,
+                  h_coarse=max(h_coarse, h_fine), refine_center=center, refine_radius=radius,
+                  growth=m.growth)
+        if dim == 3:
+            mesh = substrate_block(element=m.cells or "hex", **kw)
+        else:
+            mesh = substrate_rect(element=m.cells or "quad", **kw)
+    return FEMSubstrate(mesh, E=mat.E, nu=mat.nu, alpha=alpha, T0=T0, element=cfg.element,
+                        clamps=list(cfg.clamps), rollers=dict(cfg.rollers or {}),
+                        solver=cfg.solver)
+
+
+class CouplingModule(PhysicsModule):
+    """The ``coupling`` physics module: reads ``scene.coupling`` (see
+    :mod:`coupling.scene_section`); list it after ``fluid`` and ``heat``."""
+
+    name = "coupling"
+
+    def __init__(self, scene):
+        super().__init__(scene)
+        self.cfg = scene.coupling
+        self.driver = None
+        self.steps = 0
+        self.ledger = None
+
+    def init(self, sim) -> None:
+        from coupling.backends import make_backend
+        from sphfem.geometry import Shape
+
+        sc, cfg = self.scene, self.cfg
+        names = cfg.blocks if cfg.blocks is not None else [
+            b.name for b in sc.blocks if b.material == cfg.material and b.kind in ("wall",
+                                                                                   "solid")]
+        blocks = [sc.blocks[sc.block_index(n)] for n in names]
+        shapes = [Shape.from_block(b, sc.dim) for b in blocks]
+        lo = np.min([s.bounds()[0] for s in shapes], axis=0)
+        hi = np.max([s.bounds()[1] for s in shapes], axis=0)
+        T0 = cfg.T0 if cfg.T0 is not None else float(blocks[0].temperature)
+        ps = sim.particles
+        mats = [sc.material_index(cfg.material)]
+        region_sel = SensorSet(shapes, mats, tol=1e-9 * float(np.max(hi - lo)))
+        if cfg.backend == "fem":
+            sub = build_substrate(sc, cfg, lo, hi, T0)
+            backend = make_backend("fem", substrate=sub, surface=cfg.surface,
+                                   temperature_map=cfg.temperature_map, R=sim.R,
+                                   kernel=sc.sph.kernel)
+        else:
+            backend = make_backend("tlsph", scene=sc, sim=sim, config=cfg)
+        plane = getattr(backend, "surface_plane", None)
+        surface = None
+        if plane is not None:
+            ax, value, inward = plane
+            surface = Surface(ax, value, inward)
+        depth = cfg.sensor_depth if cfg.sensor_depth is not None else sim.R
+        sensors = SensorSet(shapes, mats, surface=surface, depth=depth,
+                            tol=region_sel.tol)
+        probes = cfg.probes
+        if probes is None and plane is not None and cfg.backend == "fem":
+            probes = default_probes(backend.sub.mesh, plane, lo, hi)
+        if probes is not None and cfg.backend == "fem":
+            backend.sub.probe_matrix(np.asarray(probes, float))  # raises if outside the mesh
+        self.driver = CouplingDriver(sensors, backend, probes, cfg.every_k_steps,
+                                     cfg.vtu_every)
+        region = sensors.region_mask(ps)
+        if not region.any():
+            raise ValueError(f"coupling: no particle of material {cfg.material!r} in blocks "
+                             f"{names}")
+        self.region_count = int(region.sum())
+        self.sensor_count = int(sensors.sensor_mask(ps).sum())
+        if "c_heat" in ps and np.all(ps.c_heat[region] > 0):
+            self.ledger = HeatLedger(ps, region)
+        self._U, self._kappa = self._scales(sim, ps)
+        self.driver.couple(ps, sim.t, sim.step_count, self._folder(sim))
+        logger.info("coupling: %d region particles, %d sensors, backend %s", self.region_count,
+                    self.sensor_count, cfg.backend)
+
+    def _scales(self, sim, ps):
+        fl = ps.kind == FLUID
+        U = float(np.sqrt((ps.v[fl] ** 2).sum(axis=1)).max()) if fl.any() and "v" in ps else 0.0
+        c0 = None
+        for m in sim.modules:
+            c0 = getattr(getattr(m, "params", None), "c0", None) or c0
+        if c0 is None:
+            c0s = [mat.c0 for mat in self.scene.materials.values() if mat.c0]
+            c0 = max(c0s) if c0s else None
+        if fl.any() and c0:
+            U = max(U, c0 / 10.0)
+        mat = self.scene.materials[self.cfg.material]
+        kappa = mat.k / (mat.rho0 * mat.c) if (mat.k and mat.c) else None
+        return (U if fl.any() else None), kappa
+
+    def _folder(self, sim):
+        out = getattr(sim, "out", None)
+        return None if out is None else Path(out) / self.cfg.output
+
+    def step(self, sim, dt: float) -> None:
+        if self.driver.every_k is None:
+            self.driver.every_k = default_every_k(self.scene.sph.dx, dt, self._U, self._kappa)
+            logger.info("coupling: one substrate solve every %d steps", self.driver.every_k)
+        self.steps += 1
+        t_new = sim.t + dt
+        tm = self.scene.time
+        last = t_new >= tm.t_end * (1 - 1e-12) or (
+            tm.max_steps is not None and sim.step_count + 1 >= tm.max_steps)
+        self.driver.maybe_couple(sim.particles, t_new, self.steps, last, self._folder(sim))
+
+    def diagnostics(self, sim) -> dict:
+        d = {"region_particles": self.region_count, "sensors": self.sensor_count,
+             **self.driver.summary()}
+        if self.ledger is not None:
+            region = self.driver.sensors.region_mask(sim.particles)
+            d["heat"] = self.ledger.figures(sim.particles, region)
+        return d
+
+
+def default_probes(mesh, plane, region_lo, region_hi, fractions=(0.0, 0.125, 0.25, 0.5, 0.75)):
+    """Points under the centre of the coupled surface at the given fractions of the
+    substrate's thickness (the surface point a hair inside)."""
+    ax, value, inward = plane
+    c = 0.5 * (np.asarray(region_lo, float) + np.asarray(region_hi, float))
+    thick = float(np.ptp(mesh.p[ax]))
+    pts = []
+    for f in fractions:
+        p = c.copy()
+        p[ax] = value + inward * max(f * thick, 1e-6 * thick)
+        pts.append(p)
+    return np.array(pts)
+
+
+def run_scene(scene, out, progress: bool = False, source=None) -> dict:
+    """Build and run ``scene`` with the coupling's outputs in ``out`` (the driver exposes
+    its output folder to modules as ``sim.out``)."""
+    from sphfem.simulation import Simulation
+
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    sim = Simulation(scene, source=source)
+    sim.out = out
+    coupling = next((m for m in sim.modules if m.name == "coupling"), None)
+    if coupling is not None and coupling.driver is not None and coupling.driver.history:
+        coupling.driver.write_history(out / coupling.cfg.output)
+    return sim, sim.run(out, progress=progress)
+
+
