@@ -35,11 +35,17 @@ def _check(rec, ctx, path):
         if rec.viscosity == "laminar" and m.mu is None:
             ctx.error(f"{where}.mu", "missing: viscosity = \"laminar\" needs the dynamic "
                                      "viscosity mu [Pa s] (or set [fluid] viscosity = \"none\")")
-        for key in ("rho0", "c0"):
+        if rec.surface_tension != "none":
+            const = rec.iif_s if rec.surface_tension == "iif" else rec.akinci_gamma
+            if const is None and m.sigma is None:
+                ctx.error(f"{where}.sigma", f"missing: surface_tension = "
+                          f"\"{rec.surface_tension}\" needs the material's surface tension "
+                          f"sigma [N/m] (or the model's calibration constant in [fluid])")
+        for key in ("rho0", "c0", "sigma"):
             if m[key] != first[key]:
-                ctx.error(f"{where}.{key}", f"all fluid materials must share {key} (the Tait "
-                          f"equation of state uses one value): {m[key]:g} != "
-                          f"{first[key]:g} of materials.{names[0]}")
+                ctx.error(f"{where}.{key}", f"all fluid materials must share {key} (the "
+                          f"fluid uses one value): {m[key]} != {first[key]} of "
+                          f"materials.{names[0]}")
 
 
 FLUID = Section("fluid", (
@@ -77,6 +83,29 @@ FLUID = Section("fluid", (
     Param("threads", int, 0, ge=0,
           doc="numba threads of the fluid passes (0: one below 20000 particles, else "
               "numba's default)"),
+    Param("surface_tension", str, "none", choices=("none", "iif", "akinci"),
+          doc="iif: inter-particle interaction force (Tartakovsky & Meakin 2005 with the "
+              "mass weighting of Park 2019 eq. 2.78), calibrated to the material's sigma "
+              "by the half-space integral of the pair potential; akinci: cohesion + "
+              "curvature of Akinci et al. (2013), gamma from sigma by the cohesion "
+              "integral (see sphfem.fluid.surface)"),
+    Param("iif_s", float, None, unit="N", positive=True, quantity="force",
+          when=("surface_tension", ("iif",)),
+          doc="calibration constant s of the IIF pair force (the thesis' \"1e6 N\"); "
+              "unset: computed from the material's sigma [N/m]"),
+    Param("akinci_gamma", float, None, positive=True, when=("surface_tension", ("akinci",)),
+          doc="Akinci coefficient gamma [m^(dim+1)/(kg s^2)]; unset: computed from the "
+              "material's sigma [N/m]"),
+    Param("shifting", str, "none", choices=("none", "interior", "all"),
+          doc="particle shifting dr = -A h |v| dt grad C (Skillen et al. 2013, Xu & Yu "
+              "2018, Park 2019 sec. 2.1.6): interior = only particles away from the free "
+              "surface; all = free-surface and near-surface particles shifted tangentially "
+              "only; needs the free-surface detection (switched on)"),
+    Param("shifting_coef", float, 5.0 / 3.0, positive=True,
+          doc="A of the shifting law (Park 2019: 5/3)"),
+    Param("detect_free_surface", bool, False,
+          doc="Marrone et al. (2010) free-surface detection every step (particle field "
+              "`free_surface` = 1 on the surface); always on with shifting"),
 ), check=_check, doc=(
     "Weakly compressible delta-SPH fluid (Tait EOS, symmetric pressure gradient, Morris "
     "viscosity, delta-SPH continuity, symplectic position-Verlet step) with Adami et al. "

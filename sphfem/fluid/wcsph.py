@@ -42,7 +42,7 @@ import numpy as np
 from numba import njit, prange
 
 from sphfem import kernels
-from sphfem.fluid import passes
+from sphfem.fluid import passes, surface
 from sphfem.fluid.eos import tait_B
 from sphfem.fluid.guards import check_fluid
 from sphfem.fluid.walls_adami2012 import adami_wall_state
@@ -104,6 +104,16 @@ class FluidParams:
     threads    numba threads for the fluid passes (0: automatic -- one thread below
                ``SERIAL_BELOW`` particles, where thread start-up costs more than it saves,
                numba's default above)
+    surface_tension  "none", "iif" (Park 2019 eq. 2.78) or "akinci" (Akinci et al. 2013);
+               see :mod:`sphfem.fluid.surface`
+    sigma      physical surface tension [N/m] (calibrates the model's constant)
+    iif_s      IIF calibration constant s [N] (None: from sigma, :func:`surface.iif_constant`)
+    akinci_gamma  Akinci coefficient [m^(dim+1)/(kg s^2)] (None: from sigma)
+    shifting   "none", "interior" (only particles away from the free surface) or "all"
+               (free-surface and near-surface particles shifted tangentially)
+    shifting_coef  A of dr = -A h |v| dt grad C [-]
+    detect_free_surface  run the Marrone et al. (2010) detection (always on with shifting);
+               the flag is the particle field ``free_surface``
     """
 
     rho0: float = 1000.0
@@ -124,6 +134,13 @@ class FluidParams:
     max_speed_factor: float = 1.0
     rho_ratio_band: tuple = (0.8, 1.25)
     threads: int = 0
+    surface_tension: str = "none"
+    sigma: float = 0.0
+    iif_s: float | None = None
+    akinci_gamma: float | None = None
+    shifting: str = "none"
+    shifting_coef: float = 5.0 / 3.0
+    detect_free_surface: bool = False
 
     def __post_init__(self):
         for k in ("rho0", "c0", "gamma"):
@@ -134,15 +151,38 @@ class FluidParams:
         lo, hi = self.rho_ratio_band
         if not 0 < lo < 1 < hi:
             raise ValueError(f"rho_ratio_band must satisfy 0 < lo < 1 < hi, got {(lo, hi)}")
+        if self.surface_tension not in ("none", "iif", "akinci"):
+            raise ValueError(f"unknown surface_tension model {self.surface_tension!r}")
+        if self.shifting not in ("none", "interior", "all"):
+            raise ValueError(f"unknown shifting mode {self.shifting!r}")
+        if self.surface_tension != "none":
+            const = self.iif_s if self.surface_tension == "iif" else self.akinci_gamma
+            if const is None and not self.sigma > 0:
+                raise ValueError(f"surface_tension = {self.surface_tension!r} needs sigma > 0 "
+                                 "[N/m] or its calibration constant")
+
+    @property
+    def uses_free_surface(self) -> bool:
+        return self.detect_free_surface or self.shifting != "none"
 
 
 #: per-particle fields of the fluid (name -> (dtype, components or "dim"))
 FIELDS = {"v": "dim", "acc": "dim", "drho": 1, "p": 1, "mu": 1, "f_fluid": "dim"}
+#: added when the free surface is detected (1.0 on free-surface particles)
+FS_FIELDS = {"free_surface": 1}
 
 
-def add_fluid_fields(particles: ParticleSet) -> None:
+def fluid_fields(params: FluidParams | None = None) -> dict:
+    """The fluid's per-particle fields for ``params``: name -> components or "dim"."""
+    out = dict(FIELDS)
+    if params is not None and params.uses_free_surface:
+        out.update(FS_FIELDS)
+    return out
+
+
+def add_fluid_fields(particles: ParticleSet, params: FluidParams | None = None) -> None:
     """Allocate the fluid's fields (zero-filled) if they are missing."""
-    for name, nc in FIELDS.items():
+    for name, nc in fluid_fields(params).items():
         particles.add_field(name, particles.dim if nc == "dim" else nc)
 
 
@@ -231,12 +271,21 @@ class _Scratch:
     v_n: np.ndarray = field(init=False)
     rho_n: np.ndarray = field(init=False)
     P: np.ndarray = field(init=False)
+    gc: np.ndarray = field(init=False)
+    nrm: np.ndarray = field(init=False)
+    lam: np.ndarray = field(init=False)
+    fs: np.ndarray = field(init=False)
+    near: np.ndarray = field(init=False)
+    shift: np.ndarray = field(init=False)
 
     def __post_init__(self):
         n, d = self.n, self.dim
         self.pr, self.V, self.meff, self.isf = (np.zeros(n) for _ in range(4))
         self.vg, self.grad, self.v_n = (np.zeros((n, d)) for _ in range(3))
-        self.rho_n = np.zeros(n)
+        self.gc, self.nrm = np.zeros((n, d)), np.zeros((n, d))
+        self.rho_n, self.lam, self.shift = np.zeros(n), np.ones(n), np.zeros(n)
+        self.fs = np.zeros(n, dtype=np.int8)
+        self.near = np.zeros(n, dtype=np.bool_)
         self.P = np.zeros((n, passes.NPACK))
         self.ok = np.ones(n, dtype=np.bool_)
 
@@ -276,9 +325,13 @@ class FluidSolver:
         g[: min(self.dim, gp.size)] = gp[: self.dim]
         self.gravity = g
         self.B = tait_B(self.params.rho0, self.params.c0, self.params.gamma)
-        add_fluid_fields(particles)
+        add_fluid_fields(particles, self.params)
         mu = particles.mu
-        mu[(particles.kind == FLUID) & (mu == 0.0)] = self.params.mu
+        fl = particles.kind == FLUID
+        mu[fl & (mu == 0.0)] = self.params.mu
+        self.m_bar = float(particles.m[fl].mean()) if fl.any() else 1.0
+        self._surface_constants()
+        self.max_shift = 0.0
         self.t = 0.0
         self.step_count = 0
         self.nbrs = None
@@ -299,6 +352,23 @@ class FluidSolver:
             else:
                 self._sync_neighbors()
             self.evaluate()
+
+    def _surface_constants(self) -> None:
+        """Calibration constant of the surface-tension model and the sigma it represents."""
+        pa = self.params
+        self.st_constant = None
+        self.st_sigma = pa.sigma
+        if pa.surface_tension == "iif":
+            self.st_constant = (pa.iif_s if pa.iif_s is not None else
+                                surface.iif_constant(pa.sigma, pa.rho0, self.m_bar, self.R,
+                                                     self.dim))
+            self.st_sigma = surface.iif_sigma(self.st_constant, pa.rho0, self.m_bar, self.R,
+                                              self.dim)
+        elif pa.surface_tension == "akinci":
+            self.st_constant = (pa.akinci_gamma if pa.akinci_gamma is not None else
+                                surface.akinci_constant(pa.sigma, pa.rho0, self.R, self.dim))
+            self.st_sigma = (self.st_constant * pa.rho0**2 * self.R**2
+                             * surface.AKINCI_C[self.dim])
 
     @property
     def p(self) -> ParticleSet:
@@ -389,7 +459,7 @@ class FluidSolver:
                          self.kkind, self.period, g, pa.rho0, self.B, pa.gamma, s.vg)
         passes.prepare_all(p.rho, p.p, p.m, p.vol, p.kind, s.pr, s.V, s.meff, s.isf)
         delta_coef = pa.delta * self.h * pa.c0
-        if delta_coef > 0:
+        if delta_coef > 0 or pa.shifting != "none":
             passes.density_gradient(p.x, p.rho, s.V, p.kind, nl.offsets, nl.indices, self.R,
                                     self.sigma, self.kkind, self.period, pa.cond_max, s.grad,
                                     s.ok)
@@ -398,6 +468,23 @@ class FluidSolver:
         passes.fluid_forces(s.P, p.kind, nl.offsets, nl.indices, self.R, self.sigma,
                             self.kkind, self.period, g, pa.eps_visc * self.h * self.h,
                             delta_coef, pa.alpha * self.h * pa.c0, p.acc, p.drho, p.f_fluid)
+        if pa.surface_tension == "iif":
+            surface.iif_accel(p.x, p.m, p.kind, nl.offsets, nl.indices, self.R,
+                              self.st_constant, self.m_bar, self.period, p.acc)
+        elif pa.surface_tension == "akinci":
+            surface.color_gradient(p.x, s.V, p.kind, nl.offsets, nl.indices, self.R,
+                                   self.sigma, self.kkind, self.period, True, s.nrm)
+            s.nrm *= self.R
+            surface.akinci_accel(p.x, p.m, p.rho, p.kind, nl.offsets, nl.indices, self.R,
+                                 self.st_constant, pa.rho0, self.m_bar, self.period, s.nrm,
+                                 p.acc)
+        if pa.uses_free_surface:
+            surface.free_surface(p.x, s.V, p.kind, nl.offsets, nl.indices, self.R,
+                                 self.sigma, self.kkind, self.period, pa.cond_max, s.gc,
+                                 s.nrm, s.lam, s.fs)
+            surface.near_surface(p.kind, nl.offsets, nl.indices, s.fs, p.x, self.R,
+                                 self.period, s.near)
+            p.free_surface[:] = s.fs
         self.wall["forces"] += time.perf_counter() - t0
 
     # -- time stepping --------------------------------------------------------------------
@@ -411,6 +498,9 @@ class FluidSolver:
             lim["viscous"] = pa.visc_cfl * self.h * self.h * rho_mu
         if amax > 0:
             lim["force"] = pa.force_cfl * math.sqrt(self.h / amax)
+        if pa.surface_tension != "none" and self.st_sigma > 0:  # Brackbill et al. (1992)
+            lim["capillary"] = 0.25 * math.sqrt(pa.rho0 * self.h**3
+                                                / (2 * math.pi * self.st_sigma))
         return lim
 
     def stable_dt(self) -> tuple[float, str]:
@@ -435,6 +525,11 @@ class FluidSolver:
         p, s = self.p, self._scratch
         t0 = time.perf_counter()
         _correct(p.x, p.v, p.rho, p.acc, p.drho, p.kind, dt, s.v_n, s.rho_n)
+        if self.params.shifting != "none":
+            surface.shift(p.x, p.v, p.rho, p.kind, s.gc, s.nrm, s.near, s.grad,
+                          self.params.shifting_coef * self.h, dt, 0.1 * self.h,
+                          self.params.shifting == "all", s.shift)
+            self.max_shift = max(self.max_shift, float(s.shift.max()))
         self.wall["integrate"] += time.perf_counter() - t0
         self.t += dt
         self.step_count += 1
@@ -497,6 +592,14 @@ class FluidSolver:
             "max_speed_over_c0": float(np.nanmax(speed)) / pa.c0 if finite else None,
             "rho_ratio_range": [float(np.nanmin(ratio)), float(np.nanmax(ratio))],
             "dt_limits_s": {k: float(v) for k, v in lims.items()},
+            "surface_tension": {
+                "model": pa.surface_tension, "sigma_N_per_m": pa.sigma,
+                "constant": self.st_constant,
+                "sigma_of_constant_N_per_m": self.st_sigma if self.st_constant else None,
+            },
+            "free_surface_particles": (int(np.count_nonzero(self._scratch.fs))
+                                       if pa.uses_free_surface else None),
+            "shifting": {"mode": pa.shifting, "max_shift_over_h": self.max_shift / self.h},
             "guards": {
                 "status": "tripped" if self.guard_message else "ok",
                 "message": self.guard_message,
@@ -535,6 +638,7 @@ def params_from_scene(scene) -> FluidParams:
     kw["rho0"] = m0.rho0
     kw["c0"] = m0.c0
     kw["mu"] = 0.0 if (cfg is not None and cfg.viscosity == "none") else (m0.mu or 0.0)
+    kw["sigma"] = m0.sigma or 0.0
     return FluidParams(**kw)
 
 
@@ -558,7 +662,8 @@ class FluidModule(PhysicsModule):
 
     def fields(self):
         dim = self.scene.dim
-        return {k: (np.float64, dim if nc == "dim" else nc) for k, nc in FIELDS.items()}
+        return {k: (np.float64, dim if nc == "dim" else nc)
+                for k, nc in fluid_fields(self.params).items()}
 
     def init(self, sim) -> None:
         ps = sim.particles
