@@ -22,7 +22,7 @@ from __future__ import annotations
 import numpy as np
 
 from sphfem.solid.constitutive import cauchy_stress, pk1_stress, von_mises
-from sphfem.solid.forces import hourglass_forces, stress_forces
+from sphfem.solid.forces import hourglass_forces, pair_forces_2d, stress_forces
 from sphfem.solid.kinematics import deformation_gradient
 from sphfem.solid.reference import build_reference
 
@@ -131,6 +131,11 @@ class SolidBody:
         deformation_gradient(x, r.vol, r.offsets, r.indices, r.gw, r.B, r.period, self.F)
         pk1_stress(self.F, self.theta - self.theta0, self.alpha, self.lam, self.mu, self.S,
                    self.P)
+        if self.dim == 2:
+            pair_forces_2d(x, r.vol, r.offsets, r.indices, r.vgw, r.dX, r.hgw, r.B, self.P,
+                           self.F, self.young, self.hourglass, r.period, self.f_int)
+            self.force_evaluations += 1
+            return self.f_int
         stress_forces(r.vol, r.offsets, r.indices, r.gw, r.B, self.P, self.f_int)
         if self.hourglass > 0.0:
             hourglass_forces(x, r.X, r.vol, r.offsets, r.indices, r.w, self.F, self.young,

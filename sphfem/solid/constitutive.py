@@ -30,10 +30,10 @@ from sphfem.operators import FASTMATH
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def _pk2(F, i, dtheta, alpha, lam, mu, S3):
-    """S (3x3) of particle i into S3."""
+def _pk2(F, i, dtheta, alpha, lam, mu, S3, C):
+    """S (3x3) of particle i into S3 (C: 3x3 scratch)."""
     dim = F.shape[1]
-    C = np.zeros((3, 3))
+    C[:, :] = 0.0
     for p in range(dim):
         for q in range(dim):
             s = 0.0
@@ -54,12 +54,44 @@ def _pk2(F, i, dtheta, alpha, lam, mu, S3):
 
 
 @njit(cache=True, fastmath=FASTMATH)
+def _pk1_2d(F, dtheta, alpha, lam, mu, S, P):
+    """Scalar twin of :func:`pk1_stress` for plane strain (F_33 = 1, S_13 = S_23 = 0)."""
+    for i in range(F.shape[0]):
+        f00, f01, f10, f11 = F[i, 0, 0], F[i, 0, 1], F[i, 1, 0], F[i, 1, 1]
+        v = 1.0 + alpha[i] * dtheta[i]
+        iv2 = 1.0 / (v * v)
+        e00 = 0.5 * ((f00 * f00 + f10 * f10) * iv2 - 1.0)
+        e01 = 0.5 * (f00 * f01 + f10 * f11) * iv2
+        e11 = 0.5 * ((f01 * f01 + f11 * f11) * iv2 - 1.0)
+        e22 = 0.5 * (iv2 - 1.0)
+        lt = lam[i] * (e00 + e11 + e22)
+        m2 = 2.0 * mu[i]
+        s00 = v * (lt + m2 * e00)
+        s01 = v * m2 * e01
+        s11 = v * (lt + m2 * e11)
+        S[i, 0, 0] = s00
+        S[i, 0, 1] = s01
+        S[i, 1, 0] = s01
+        S[i, 1, 1] = s11
+        S[i, 2, 2] = v * (lt + m2 * e22)
+        S[i, 0, 2] = S[i, 2, 0] = S[i, 1, 2] = S[i, 2, 1] = 0.0
+        P[i, 0, 0] = f00 * s00 + f01 * s01
+        P[i, 0, 1] = f00 * s01 + f01 * s11
+        P[i, 1, 0] = f10 * s00 + f11 * s01
+        P[i, 1, 1] = f10 * s01 + f11 * s11
+
+
+@njit(cache=True, fastmath=FASTMATH)
 def pk1_stress(F, dtheta, alpha, lam, mu, S, P):
     """S (n, 3, 3) second and P = F S (n, dim, dim) first Piola-Kirchhoff stresses."""
     n, dim = F.shape[0], F.shape[1]
+    if dim == 2:
+        _pk1_2d(F, dtheta, alpha, lam, mu, S, P)
+        return
     S3 = np.empty((3, 3))
+    C = np.empty((3, 3))
     for i in range(n):
-        _pk2(F, i, dtheta, alpha, lam, mu, S3)
+        _pk2(F, i, dtheta, alpha, lam, mu, S3, C)
         for p in range(3):
             for q in range(3):
                 S[i, p, q] = S3[p, q]

@@ -45,6 +45,19 @@ def stress_forces(vol, offsets, indices, gw, B, P, f):
                 for k in range(dim):
                     s += P[i, p, k] * B[i, k, q]
                 PB[i, p, q] = s
+    if dim == 2:
+        for i in range(n):
+            f0 = f1 = 0.0
+            p00, p01, p10, p11 = PB[i, 0, 0], PB[i, 0, 1], PB[i, 1, 0], PB[i, 1, 1]
+            for jj in range(offsets[i], offsets[i + 1]):
+                j = indices[jj]
+                g0 = vol[j] * gw[jj, 0]
+                g1 = vol[j] * gw[jj, 1]
+                f0 += (p00 + PB[j, 0, 0]) * g0 + (p01 + PB[j, 0, 1]) * g1
+                f1 += (p10 + PB[j, 1, 0]) * g0 + (p11 + PB[j, 1, 1]) * g1
+            f[i, 0] = vol[i] * f0
+            f[i, 1] = vol[i] * f1
+        return
     for i in range(n):
         for p in range(dim):
             f[i, p] = 0.0
@@ -59,9 +72,38 @@ def stress_forces(vol, offsets, indices, gw, B, P, f):
 
 
 @njit(cache=True, fastmath=FASTMATH)
+def _hourglass_2d(x, X, vol, offsets, indices, w, F, E, alpha_hg, period, f):
+    """Scalar twin of :func:`hourglass_forces` for dim = 2."""
+    L0, L1 = period[0], period[1]
+    for i in range(x.shape[0]):
+        fi0 = fi1 = 0.0
+        for jj in range(offsets[i], offsets[i + 1]):
+            j = indices[jj]
+            R0 = min_image(X[j, 0] - X[i, 0], L0)
+            R1 = min_image(X[j, 1] - X[i, 1], L1)
+            r0 = min_image(x[j, 0] - x[i, 0], L0)
+            r1 = min_image(x[j, 1] - x[i, 1], L1)
+            D2 = R0 * R0 + R1 * R1
+            d2 = r0 * r0 + r1 * r1
+            if D2 == 0.0 or d2 == 0.0:
+                continue
+            e0 = (F[i, 0, 0] + F[j, 0, 0]) * R0 + (F[i, 0, 1] + F[j, 0, 1]) * R1 - 2.0 * r0
+            e1 = (F[i, 1, 0] + F[j, 1, 0]) * R0 + (F[i, 1, 1] + F[j, 1, 1]) * R1 - 2.0 * r1
+            c = (-0.25 * alpha_hg * vol[i] * vol[j] * w[jj] * (E[i] + E[j]) / D2
+                 * (e0 * r0 + e1 * r1) / d2)
+            fi0 += c * r0
+            fi1 += c * r1
+        f[i, 0] += fi0
+        f[i, 1] += fi1
+
+
+@njit(cache=True, fastmath=FASTMATH)
 def hourglass_forces(x, X, vol, offsets, indices, w, F, E, alpha_hg, period, f):
     """Add the Ganzenmueller (2015) hourglass forces to f (n, dim)."""
     n, dim = x.shape
+    if dim == 2:
+        _hourglass_2d(x, X, vol, offsets, indices, w, F, E, alpha_hg, period, f)
+        return
     R0 = np.empty(dim)
     r = np.empty(dim)
     for i in range(n):
@@ -87,3 +129,42 @@ def hourglass_forces(x, X, vol, offsets, indices, w, F, E, alpha_hg, period, f):
             c = -0.5 * alpha_hg * vol[i] * vol[j] * w[jj] * 0.5 * (E[i] + E[j]) / D2 * delta / d
             for p in range(dim):
                 f[i, p] += c * r[p]
+
+
+@njit(cache=True, fastmath=FASTMATH)
+def pair_forces_2d(x, vol, offsets, indices, vgw, dX, hgw, B, P, F, E, alpha_hg, period, f):
+    """Fused 2D pass: f = :func:`stress_forces` + :func:`hourglass_forces`, with the
+    per-pair constants of the reference configuration precomputed: ``vgw`` = V0_j gW_ij,
+    ``dX`` = X_ij, ``hgw`` = V0_i V0_j W0_ij / |X_ij|^2 (0 for coincident particles)."""
+    n = x.shape[0]
+    L0, L1 = period[0], period[1]
+    PB = np.empty((n, 2, 2))
+    for i in range(n):
+        for p in range(2):
+            for q in range(2):
+                PB[i, p, q] = P[i, p, 0] * B[i, 0, q] + P[i, p, 1] * B[i, 1, q]
+    c0 = -0.25 * alpha_hg
+    for i in range(n):
+        fs0 = fs1 = fh0 = fh1 = 0.0
+        p00, p01, p10, p11 = PB[i, 0, 0], PB[i, 0, 1], PB[i, 1, 0], PB[i, 1, 1]
+        f00, f01, f10, f11 = F[i, 0, 0], F[i, 0, 1], F[i, 1, 0], F[i, 1, 1]
+        xi0, xi1, Ei = x[i, 0], x[i, 1], E[i]
+        for jj in range(offsets[i], offsets[i + 1]):
+            j = indices[jj]
+            g0, g1 = vgw[jj, 0], vgw[jj, 1]
+            fs0 += (p00 + PB[j, 0, 0]) * g0 + (p01 + PB[j, 0, 1]) * g1
+            fs1 += (p10 + PB[j, 1, 0]) * g0 + (p11 + PB[j, 1, 1]) * g1
+            if alpha_hg != 0.0:
+                r0 = min_image(x[j, 0] - xi0, L0)
+                r1 = min_image(x[j, 1] - xi1, L1)
+                d2 = r0 * r0 + r1 * r1
+                if d2 == 0.0:
+                    continue
+                R0, R1 = dX[jj, 0], dX[jj, 1]
+                e0 = (f00 + F[j, 0, 0]) * R0 + (f01 + F[j, 0, 1]) * R1 - 2.0 * r0
+                e1 = (f10 + F[j, 1, 0]) * R0 + (f11 + F[j, 1, 1]) * R1 - 2.0 * r1
+                c = hgw[jj] * (Ei + E[j]) * (e0 * r0 + e1 * r1) / d2
+                fh0 += c * r0
+                fh1 += c * r1
+        f[i, 0] = vol[i] * fs0 + c0 * fh0
+        f[i, 1] = vol[i] * fs1 + c0 * fh1

@@ -18,9 +18,36 @@ from sphfem.operators import FASTMATH
 
 
 @njit(cache=True, fastmath=FASTMATH)
+def _deformation_gradient_2d(x, vol, offsets, indices, gw, B, period, F):
+    """Scalar-register twin of :func:`deformation_gradient` for dim = 2."""
+    n = x.shape[0]
+    L0, L1 = period[0], period[1]
+    for i in range(n):
+        a00 = a01 = a10 = a11 = 0.0
+        xi0, xi1 = x[i, 0], x[i, 1]
+        for jj in range(offsets[i], offsets[i + 1]):
+            j = indices[jj]
+            r0 = min_image(x[j, 0] - xi0, L0)
+            r1 = min_image(x[j, 1] - xi1, L1)
+            g0 = vol[j] * gw[jj, 0]
+            g1 = vol[j] * gw[jj, 1]
+            a00 += r0 * g0
+            a01 += r0 * g1
+            a10 += r1 * g0
+            a11 += r1 * g1
+        F[i, 0, 0] = a00 * B[i, 0, 0] + a01 * B[i, 1, 0]
+        F[i, 0, 1] = a00 * B[i, 0, 1] + a01 * B[i, 1, 1]
+        F[i, 1, 0] = a10 * B[i, 0, 0] + a11 * B[i, 1, 0]
+        F[i, 1, 1] = a10 * B[i, 0, 1] + a11 * B[i, 1, 1]
+
+
+@njit(cache=True, fastmath=FASTMATH)
 def deformation_gradient(x, vol, offsets, indices, gw, B, period, F):
     """Write F_i (n, dim, dim) for current positions ``x`` (n, dim)."""
     n, dim = x.shape
+    if dim == 2:
+        _deformation_gradient_2d(x, vol, offsets, indices, gw, B, period, F)
+        return
     A = np.empty((dim, dim))
     r = np.empty(dim)
     for i in range(n):

@@ -122,4 +122,16 @@ def build_reference(X, vol, R: float, kernel: str = "wendland_c2", period=None,
     indices = np.ascontiguousarray(nl.indices)
     gw, w, B, ok = reference_pairs(X, vol, offsets, indices, R, sigma, kind, period,
                                    cond_max)
-    return ReferenceConfig(X, vol, offsets, indices, gw, w, B, ok, float(R), period)
+    ref = ReferenceConfig(X, vol, offsets, indices, gw, w, B, ok, float(R), period)
+    # per-pair constants of the fused 2D force pass (sphfem.solid.forces.pair_forces_2d)
+    rows = np.repeat(np.arange(n), np.diff(offsets))
+    dX = X[indices] - X[rows]
+    for k in range(dim):
+        if period[k] > 0:
+            dX[:, k] -= period[k] * np.round(dX[:, k] / period[k])
+    D2 = np.einsum("ij,ij->i", dX, dX)
+    ref.vgw = np.ascontiguousarray(vol[indices][:, None] * gw)
+    ref.dX = np.ascontiguousarray(dX)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ref.hgw = np.where(D2 > 0, vol[rows] * vol[indices] * w / D2, 0.0)
+    return ref

@@ -221,3 +221,148 @@ def danilovskaya(quick: bool) -> CaseResult:
              "compilation on the first run"]
     return CaseResult("danilovskaya", runs, criteria, notes, resolution_label="dx",
                       extra_columns={"T_err_l2": "T err L2", "relax_steps": "DR steps"})
+
+
+# ---------------------------------------------------------------------------------------
+# Bilayer: free-standing bimaterial strip heated uniformly
+# ---------------------------------------------------------------------------------------
+BIL = dict(E2=1e6, nu=0.3, alpha1=0.0, alpha2=1e-3, dT=1.0, rho=1.0)
+RATIOS = (0.5, 1.0, 2.0)
+
+
+def timoshenko_curvature(m: float, n: float, h: float, dalpha_dT: float) -> float:
+    """Timoshenko (1925) bimetal curvature, m = h1/h2, n = E1/E2, h = h1 + h2 (DESIGN.md
+    errata for Park eq. 2.139):
+    kappa = 6 (a2 - a1) dT (1 + m)^2 / (h [3 (1 + m)^2 + (1 + m n)(m^2 + 1/(m n))])."""
+    return 6 * dalpha_dT * (1 + m) ** 2 / (h * (3 * (1 + m) ** 2
+                                                + (1 + m * n) * (m * m + 1 / (m * n))))
+
+
+def circle_curvature(P: np.ndarray) -> float:
+    """Curvature 1/r of the least-squares (Kasa) circle through points P (n, 2)."""
+    x, y = P[:, 0], P[:, 1]
+    A = np.column_stack([x, y, np.ones_like(x)])
+    c, *_ = np.linalg.lstsq(A, x * x + y * y, rcond=None)
+    xc, yc = c[0] / 2, c[1] / 2
+    return 1.0 / math.sqrt(c[2] + xc * xc + yc * yc)
+
+
+def _bilayer_exact(m, n):
+    """Plane strain with equal nu: the beam formula with E/(1 - nu^2) (ratio n unchanged)
+    and the constrained out-of-plane expansion, alpha -> (1 + nu) alpha."""
+    p = BIL
+    return timoshenko_curvature(m, n, 1.0, (1 + p["nu"]) * (p["alpha2"] - p["alpha1"])
+                                * p["dT"])
+
+
+def _bilayer_tlsph(m, n, nt, aspect):
+    from sphfem.solid.body import SolidBody
+    from sphfem.solid.constitutive import lame
+    from sphfem.solid.integrate import relax
+    from sphfem.solid.lattice import box_lattice
+
+    p = BIL
+    h, dx = 1.0, 1.0 / nt
+    h1 = h * m / (1 + m)
+    L = aspect * h
+    X = box_lattice((0.0, 0.0), (L, h), dx)
+    mat1 = X[:, 1] < h1
+    lam, mu = lame(np.where(mat1, n * p["E2"], p["E2"]), p["nu"])
+    body = SolidBody(X, dx * dx, p["rho"], lam, mu,
+                     np.where(mat1, p["alpha1"], p["alpha2"]), dx)
+    body.theta[:] = p["dT"]
+    info = relax(body, tol=1e-6, max_steps=200000)
+    mid = np.abs(X[:, 0] - L / 2) < L / 4
+    ks = [circle_curvature(body.x[mid & (X[:, 1] == y)]) for y in np.unique(X[:, 1])]
+    return float(np.median(ks)), body.n, info
+
+
+def _bilayer_fem(m, n, ny, aspect):
+    """Q2 plane-strain FEM of the strip (scikit-fem), two materials, 2-1 pins."""
+    from scipy.sparse.linalg import splu
+    from skfem import Basis, ElementQuad2, ElementVector, MeshQuad1
+
+    from sphfem.fem import forms
+
+    p = BIL
+    h = 1.0
+    h1 = h * m / (1 + m)
+    L = aspect * h
+    n1 = max(1, round(ny * m / (1 + m)))
+    ys = np.concatenate([np.linspace(0, h1, n1 + 1), np.linspace(h1, h, ny - n1 + 1)[1:]])
+    xs = np.linspace(0, L, int(round(aspect * ny)) + 1)
+    mesh = MeshQuad1.init_tensor(xs, ys)
+    e = ElementVector(ElementQuad2())
+    basis = Basis(mesh, e)
+    yc = mesh.p[1, mesh.t].mean(axis=0)
+    K = None
+    f = basis.zeros()
+    for sel, E, a in ((yc < h1, n * p["E2"], p["alpha1"]), (yc >= h1, p["E2"], p["alpha2"])):
+        b = Basis(mesh, e, elements=np.flatnonzero(sel))
+        lam, mu = forms.lame_parameters(E, p["nu"])
+        Ki = forms.elasticity(lam, mu).assemble(b)
+        K = Ki if K is None else K + Ki
+        dT = np.full((b.nelems, b.X.shape[1]), p["dT"])
+        f += forms.thermal_load(lam, mu, a).assemble(b, dT=dT)
+    nd = basis.nodal_dofs
+    a0 = int(np.argmin(np.hypot(mesh.p[0], mesh.p[1])))
+    a1 = int(np.argmin(np.hypot(mesh.p[0] - L, mesh.p[1])))
+    D = np.array([nd[0, a0], nd[1, a0], nd[1, a1]])
+    I = np.setdiff1d(np.arange(basis.N), D)
+    u = basis.zeros()
+    u[I] = splu(K[I][:, I].tocsc()).solve(f[I])
+    U = u[nd].T
+    xdef = mesh.p.T + U
+    mid = np.abs(mesh.p[0] - L / 2) < L / 4
+    ks = [circle_curvature(xdef[mid & np.isclose(mesh.p[1], y)]) for y in ys]
+    return float(np.median(ks)), basis.N
+
+
+@register("bilayer")
+def bilayer(quick: bool) -> CaseResult:
+    """Free-standing bimaterial strip (2D plane strain, nu = 0.3 in both layers, length
+    ``aspect`` x thickness 1, no support), heated uniformly: material 2 (top) expands,
+    material 1 (bottom) does not.  Curvature of the deformed strip (least-squares circle
+    through each particle row / node row in the middle half, median over rows) against
+    Timoshenko (1925) for E1/E2 and h1/h2 in {0.5, 1, 2}; TL-SPH (dynamic relaxation) and
+    Q2 FEM.  ``resolution`` = particles (elements) through the thickness."""
+    sph_res = (6,) if quick else (6, 9, 12)
+    fem_res = (3, 6) if quick else (3, 6, 12)
+    aspect = 6.0 if quick else 8.0
+    runs, worst_sph, worst_fem = [], {}, {}
+    for nt in sph_res:
+        for m in RATIOS:
+            for n in RATIOS:
+                with Timer() as tm:
+                    k, npart, info = _bilayer_tlsph(m, n, nt, aspect)
+                ke = _bilayer_exact(m, n)
+                err = abs(k / ke - 1)
+                runs.append(Run(f"tlsph h1/h2={m:g} E1/E2={n:g}", 1.0 / nt, npart, err, err,
+                                tm.s, {"kappa": k, "kappa_exact": ke,
+                                       "dr_steps": info["steps"]}))
+                worst_sph[nt] = max(worst_sph.get(nt, 0.0), err)
+    for ny in fem_res:
+        for m in RATIOS:
+            for n in RATIOS:
+                with Timer() as tm:
+                    k, ndof = _bilayer_fem(m, n, ny, aspect)
+                ke = _bilayer_exact(m, n)
+                err = abs(k / ke - 1)
+                runs.append(Run(f"fem-Q2 h1/h2={m:g} E1/E2={n:g}", 1.0 / ny, ndof, err, err,
+                                tm.s, {"kappa": k, "kappa_exact": ke}))
+                worst_fem[ny] = max(worst_fem.get(ny, 0.0), err)
+    criteria = {
+        "tlsph": Criterion(f"TL-SPH worst curvature error, {max(sph_res)} particles through "
+                           "the thickness", worst_sph[max(sph_res)], 0.05),
+        "fem": Criterion(f"FEM worst curvature error, {max(fem_res)} Q2 elements through the "
+                         "thickness", worst_fem[max(fem_res)], 0.05),
+    }
+    notes = ["2D plane strain; exact: Timoshenko with alpha -> (1 + nu) alpha (plane "
+             f"strain); E2 = {BIL['E2']}, alpha1 = {BIL['alpha1']}, alpha2 = "
+             f"{BIL['alpha2']}, dT = {BIL['dT']}; strip {aspect:g} x 1",
+             "worst error per resolution: TL-SPH "
+             + ", ".join(f"{k}: {v:.3%}" for k, v in worst_sph.items())
+             + "; FEM " + ", ".join(f"{k}: {v:.3%}" for k, v in worst_fem.items())]
+    return CaseResult("bilayer", runs, criteria, notes, resolution_label="1/n_thick",
+                      extra_columns={"kappa": "kappa", "kappa_exact": "Timoshenko",
+                                     "dr_steps": "DR steps"})
