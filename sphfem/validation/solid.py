@@ -366,3 +366,92 @@ def bilayer(quick: bool) -> CaseResult:
     return CaseResult("bilayer", runs, criteria, notes, resolution_label="1/n_thick",
                       extra_columns={"kappa": "kappa", "kappa_exact": "Timoshenko",
                                      "dr_steps": "DR steps"})
+
+
+# ---------------------------------------------------------------------------------------
+# sph-vs-fem: one substrate problem, both backends
+# ---------------------------------------------------------------------------------------
+SVF = dict(size=(2e-3, 1e-3), E=300e9, nu=0.21, alpha=7e-6, rho=3900.0, p=200e6, a=0.3e-3,
+           dT=50.0, w=0.6e-3, d=0.4e-3)
+#: probe points: under the patch centre and outside it, at least 0.2 mm from the patch
+#: edges (x = +-0.3 mm) and from the top
+SVF_PROBES = ((0.0, -0.25e-3), (0.0, -0.5e-3), (0.0, -0.75e-3), (0.6e-3, -0.3e-3),
+              (-0.6e-3, -0.5e-3), (0.7e-3, -0.7e-3))
+
+
+def _svf_dT(x):
+    """Surface temperature field decaying into the block: dT exp(-(x/w)^2) exp(y/d)."""
+    p = SVF
+    return p["dT"] * np.exp(-(x[0] / p["w"]) ** 2) * np.exp(x[1] / p["d"])
+
+
+def _svf_traction(x):
+    p = SVF
+    on = np.abs(x[0]) < p["a"]
+    return np.stack([0.0 * x[0], -p["p"] * on.astype(float)])
+
+
+@register("sph-vs-fem")
+def sph_vs_fem(quick: bool) -> CaseResult:
+    """2D plane-strain block 2 mm x 1 mm (top at y = 0) clamped at the bottom, a uniform
+    pressure patch |x| < 0.3 mm on the top and the temperature field
+    50 K exp(-(x/0.6 mm)^2) exp(y/0.4 mm); E = 300 GPa, nu = 0.21, alpha = 7e-6.  Von
+    Mises at six probe points away from the patch edges: TL-SPH (TLSPHSubstrate, dynamic
+    relaxation) at several spacings against a fine Q2 FEM reference (FEMSubstrate on the
+    gmsh quad recipe); Q1 FEM at the same sizes is listed too.  Table errors: relative to
+    the largest probe von Mises of the reference; the criterion takes the worst error
+    relative to each probe's own reference value."""
+    from sphfem.fem import FEMSubstrate, substrate_rect
+    from sphfem.solid.backend import TLSPHSubstrate
+
+    p = SVF
+    Lx, Ly = p["size"]
+    probes = np.array(SVF_PROBES)
+    loads = dict(dT_nodal=_svf_dT, tractions={"top": _svf_traction})
+
+    def fem(h, element):
+        mesh = substrate_rect(size=p["size"], h_fine=h, h_coarse=h, element="quad",
+                              refine_center=(0.0, 0.0), refine_radius=Lx)
+        with Timer() as tm:
+            sub = FEMSubstrate(mesh, p["E"], p["nu"], p["alpha"], T0=0.0, element=element,
+                               clamps=["bottom"])
+            r = sub.solve(**loads)
+            vm = r.probe(probes)["von_mises"]
+        return vm, sub.n_dofs, tm.s
+
+    h_ref = Lx / (80 if quick else 160)
+    ref, ref_dofs, ref_s = fem(h_ref, "P2")
+    scale = float(np.abs(ref).max())
+    runs = []
+    sph_dx = (Lx / 40, Lx / 80) if quick else (Lx / 40, Lx / 80, Lx / 160)
+    errs = {}
+    for dx in sph_dx:
+        with Timer() as tm:
+            sub = TLSPHSubstrate((-Lx / 2, -Ly), (Lx / 2, 0.0), dx, p["E"], p["nu"],
+                                 p["alpha"], T0=0.0, rho=p["rho"], clamps=["bottom"])
+            r = sub.solve(**loads)
+            vm = r.probe(probes)["von_mises"]
+        e = np.abs(vm - ref) / scale
+        errs[dx] = float((np.abs(vm - ref) / np.abs(ref)).max())
+        l2, _ = relative_errors(vm, ref)
+        runs.append(Run("tlsph", dx, sub.n_particles, l2, float(e.max()), tm.s,
+                        {"dr_steps": r.info["steps"],
+                         "vm_MPa": " ".join(f"{v / 1e6:.1f}" for v in vm)}))
+    for h in sph_dx:
+        vm, ndof, s = fem(h, "P1")
+        l2, _ = relative_errors(vm, ref)
+        runs.append(Run("fem-Q1", h, ndof, l2, float((np.abs(vm - ref) / scale).max()), s,
+                        {"vm_MPa": " ".join(f"{v / 1e6:.1f}" for v in vm)}))
+    runs.append(Run("fem-Q2 reference", h_ref, ref_dofs, 0.0, 0.0, ref_s,
+                    {"vm_MPa": " ".join(f"{v / 1e6:.1f}" for v in ref)}))
+    finest = min(sph_dx)
+    criteria = {"vm": Criterion(f"TL-SPH von Mises at the probes, worst relative error per "
+                                f"probe (dx = {finest:.3g} m)",
+                                errs[finest], 0.05)}
+    notes = [f"2D plane strain; probes {SVF_PROBES} m; reference Q2 FEM h = {h_ref:.3g} m "
+             f"(von Mises {', '.join(f'{v / 1e6:.1f}' for v in ref)} MPa)",
+             "TL-SPH: 3 clamped rows below the bottom face, traction t dx on the top "
+             "layer, relaxation to 1e-6; FEM run times include assembly + factorisation; "
+             "TL-SPH run times include the lattice set-up and numba dispatch"]
+    return CaseResult("sph-vs-fem", runs, criteria, notes, resolution_label="dx / h",
+                      extra_columns={"dr_steps": "DR steps"})
