@@ -455,3 +455,133 @@ def sph_vs_fem(quick: bool) -> CaseResult:
              "TL-SPH run times include the lattice set-up and numba dispatch"]
     return CaseResult("sph-vs-fem", runs, criteria, notes, resolution_label="dx / h",
                       extra_columns={"dr_steps": "DR steps"})
+
+
+# ---------------------------------------------------------------------------------------
+# Stability: rigid rotation, stretch to 2x, stiff implicit step
+# ---------------------------------------------------------------------------------------
+def _hourglass_indicator(body, mask=None) -> float:
+    """max over pairs |F_i X_ij - x_ij| / |X_ij| (i in ``mask``): the part of the particle
+    motion the deformation gradient does not describe (zero for affine motion; hourglass
+    modes and tensile-instability clumping make it O(1))."""
+    r = body.ref
+    rows = np.repeat(np.arange(body.n), np.diff(r.offsets))
+    dx = body.x[r.indices] - body.x[rows]
+    pred = np.einsum("pij,pj->pi", body.F[rows], r.dX)
+    e = np.linalg.norm(pred - dx, axis=1) / np.linalg.norm(r.dX, axis=1)
+    if mask is not None:
+        e = e[np.asarray(mask, bool)[rows]]
+    return float(e.max())
+
+
+@register("tlsph-stability")
+def tlsph_stability(quick: bool) -> CaseResult:
+    """2D plane strain.  (1) A 20 x 4 particle bar rotated rigidly by 30..180 degrees: the
+    stress must vanish (relative to E).  (2) A 4 x 0.8 bar, clamped at one end, the other end
+    pulled at constant speed to twice its length (mild damping): no NaN, no clumping
+    (smallest neighbour distance ratio), no hourglass mode (indicator of
+    :func:`_hourglass_indicator` small), stretch F_11 ~ 2 mid-bar (nu = 0.1, see below).
+    (3) E = 300 GPa: the implicit trapezoidal step at 0.5x the explicit limit converges; at
+    100x it must stop with
+    :class:`SolidConvergenceError` (state restored)."""
+    from sphfem.solid.body import SolidBody
+    from sphfem.solid.constitutive import lame
+    from sphfem.solid.integrate import SolidConvergenceError, trapezoid_step, verlet_step
+    from sphfem.solid.lattice import box_lattice
+
+    runs, crit, notes = [], {}, []
+    E, nu, rho = 1e6, 0.3, 1000.0
+    lam, mu = lame(E, nu)
+    dx = 0.1
+    # (1) rigid rotation
+    X = box_lattice((0, 0), (2.0, 0.4), dx)
+    worst = 0.0
+    with Timer() as tm:
+        body = SolidBody(X, dx * dx, rho, lam, mu, 0.0, dx)
+        for deg in (30, 90, 135, 180):
+            a = math.radians(deg)
+            Q = np.array([[math.cos(a), -math.sin(a)], [math.sin(a), math.cos(a)]])
+            body.x[:] = X @ Q.T + 1.0
+            f = body.internal_forces()
+            worst = max(worst, float(np.abs(body.cauchy()).max()) / E,
+                        float(np.abs(f).max()) / (E * dx))
+    runs.append(Run("rigid rotation", dx, body.n, worst, worst, tm.s))
+    crit["rotation"] = Criterion("max |sigma| / E and |f| / (E dx) under rigid rotation",
+                                 worst, 1e-10)
+    # (2) stretch to 2x
+    L, H = 4.0, 0.8
+    dxs = 0.1 if quick else 0.05
+    X = box_lattice((0, 0), (L, H), dxs)
+    # nu = 0.1: SVK has a limit point in lateral compression at a stretch 1/sqrt(3); with
+    # nu = 0.3 a 2x plane-strain stretch contracts the bar laterally to 0.32 -- past it (a
+    # material instability of SVK, not a numerical one); nu = 0.1 gives 0.84
+    lam_t, mu_t = lame(E, 0.1)
+    with Timer() as tm:
+        body = SolidBody(X, dxs * dxs, rho, lam_t, mu_t, 0.0, dxs, damping=0.0)
+        body.clamp(X[:, 0] < 3 * dxs)
+        c = body.wave_speed()
+        T = 20 * L / c
+        body.prescribe_velocity(X[:, 0] > L - 3 * dxs, (float(np.ptp(X[:, 0])) / T, 0.0))
+        body.damping = 2.0 * (math.pi * c / (2 * L))  # ~critical for the first axial mode
+        t, steps, ok = 0.0, 0, True
+        dt = body.stable_dt(0.8)
+        while t < T - 1e-12:
+            h = min(dt, T - t)
+            verlet_step(body, h)
+            t += h
+            steps += 1
+            if steps % 200 == 0:
+                if not np.all(np.isfinite(body.x)):
+                    ok = False
+                    break
+                dt = body.stable_dt(0.8)
+        body.internal_forces()
+    r = body.ref
+    rows = np.repeat(np.arange(body.n), np.diff(r.offsets))
+    dcur = np.linalg.norm(body.x[r.indices] - body.x[rows], axis=1)
+    ratio = float((dcur / np.linalg.norm(r.dX, axis=1)).min())
+    mid = np.abs(X[:, 0] - L / 2) < L / 4  # the grips (F jumps from I to ~2) left out
+    hg = _hourglass_indicator(body, mid)
+    F11 = float(np.median(body.F[mid, 0, 0]))
+    length = float(np.ptp(body.x[:, 0]) / np.ptp(X[:, 0]))
+    runs.append(Run("stretch to 2x", dxs, body.n, hg, hg, tm.s,
+                    {"steps": steps, "min_dist_ratio": ratio, "F11_mid": F11,
+                     "length_ratio": length}))
+    crit["stretch_finite"] = Criterion("stretch run finite (1 = yes)", float(ok), 1.0, ">=")
+    crit["stretch_length"] = Criterion("end-to-end length ratio reached", length, 1.99, ">=")
+    crit["hourglass"] = Criterion("hourglass indicator max |F X_ij - x_ij| / |X_ij| at 2x, "
+                                  "middle half of the bar",
+                                  hg, 0.1)
+    crit["no_clumping"] = Criterion("smallest neighbour distance ratio (current / "
+                                    "reference) at 2x", ratio, 0.5, ">=")
+    notes.append(f"stretch: F_11 mid-bar {F11:.3f}, {steps} Verlet steps, damping "
+                 f"{body.damping:.3g} 1/s, pull time 20 L / c")
+    # (3) stiff implicit step
+    Es = 300e9
+    lam_s, mu_s = lame(Es, 0.21)
+    X = box_lattice((0, 0), (2e-3, 0.4e-3), 0.1e-3)
+    with Timer() as tm:
+        body = SolidBody(X, 1e-8, 3900.0, lam_s, mu_s, 7e-6, 0.1e-3)
+        body.clamp(X[:, 0] < 0.3e-3)
+        body.f_ext[X[:, 0] > 1.9e-3] = (0.0, -1e3)
+        dt_exp = body.stable_dt(1.0)
+        small = trapezoid_step(body, 0.5 * dt_exp, tol=1e-9, step_index=0)
+        x_before = body.x.copy()
+        msg, restored = "", False
+        try:
+            trapezoid_step(body, 100 * dt_exp, tol=1e-9, step_index=1, max_iter=100)
+            stopped = False
+        except SolidConvergenceError as e:
+            stopped, msg = True, str(e)
+            restored = bool(np.array_equal(body.x, x_before))
+    runs.append(Run("E=300GPa implicit 100x", 0.1e-3, body.n, 0.0, 0.0, tm.s,
+                    {"iters_0.5x": small["iterations"], "stopped_100x": int(stopped)}))
+    crit["implicit_small"] = Criterion("fixed-point iterations at 0.5x the explicit limit "
+                                       "(converged)", float(small["iterations"]), 100)
+    crit["implicit_100x"] = Criterion("100x the explicit limit: clear stop with state "
+                                      "restored (1 = yes)", float(stopped and restored), 1.0,
+                                      ">=")
+    notes.append(f"explicit limit {dt_exp:.3g} s; 100x step stopped with: {msg}")
+    return CaseResult("tlsph-stability", runs, crit, notes, resolution_label="dx",
+                      extra_columns={"steps": "steps", "min_dist_ratio": "min d/d0",
+                                     "F11_mid": "F11 mid", "iters_0.5x": "iters"})
