@@ -18,5 +18,24 @@ Modules, one job each:
 * :mod:`~sphfem.solid.backend`      -- :class:`TLSPHSubstrate`, the FEMSubstrate-like
   quasi-static substrate backend
 
+* :mod:`~sphfem.solid.coupled`      -- :class:`TLSPHBackend` for the coupling driver
+  (``[coupling] backend = "tlsph"``)
+
 Importing this package compiles nothing.
 """
+
+
+def __getattr__(name):
+    if name == "TLSPHBackend":
+        from sphfem.solid.coupled import TLSPHBackend
+
+        return TLSPHBackend
+    if name == "TLSPHSubstrate":
+        from sphfem.solid.backend import TLSPHSubstrate
+
+        return TLSPHSubstrate
+    if name == "SolidBody":
+        from sphfem.solid.body import SolidBody
+
+        return SolidBody
+    raise AttributeError(name)

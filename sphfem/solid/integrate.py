@@ -23,7 +23,8 @@
   excited mode, omega_min^2 estimated each step by the Rayleigh quotient
   u.(f0 - f(u)) / u.M u of the displacement u since the start (exact for a linear
   response).  Converged when ||f_int + f_ext|| (free components) <= tol * ||load||, the
-  load being the out-of-balance force of the undeformed body under the current loads.
+  load being the out-of-balance force of the undeformed body under the current loads
+  (floored at the load of a 1e-7 strain, see the code).
 """
 
 from __future__ import annotations
@@ -119,8 +120,11 @@ def relax(body, tol: float = 1e-6, max_steps: int = 200000, dt: float | None = N
     f_ref = (body.internal_forces(body.ref.X.copy()) + body.f_ext) * free
     load = float(np.linalg.norm(f_ref))
     f0 = (body.internal_forces() + body.f_ext) * free
-    if load == 0.0:
-        load = max(float(np.linalg.norm(f0)), 1e-300)
+    # floor: the load of a strain of 1e-7 on every particle, sqrt(n) E dx^(dim-1) 1e-7, so
+    # that tol * floor stays far above the round-off forces (~ sqrt(n) E dx^(dim-1) 1e-15):
+    # round-off-level loads (a mapped temperature equal to T0 to 1e-14 K) count as no load
+    floor = 1e-7 * np.sqrt(body.n) * float(body.young.max()) * body.dx ** (body.dim - 1)
+    load = max(load, floor)
     v = np.zeros_like(body.x)
     steps = 0
     res = float(np.linalg.norm(f0)) / load
