@@ -20,9 +20,17 @@ Modules, one job each:
 
 * :mod:`~sphfem.solid.coupled`      -- :class:`TLSPHBackend` for the coupling driver
   (``[coupling] backend = "tlsph"``)
+* :mod:`~sphfem.solid.module`       -- :class:`TLSPHModule`, the ``tlsph`` physics module
+  of the scene driver; :mod:`~sphfem.solid.scene_section` its ``[tlsph]`` section
 
-Importing this package compiles nothing.
+Importing this package registers the ``tlsph`` module and its section by name only; it
+compiles nothing.
 """
+
+from sphfem.schema import register_module
+from sphfem.solid.scene_section import TLSPH
+
+register_module("tlsph", TLSPH, target="sphfem.solid.module:TLSPHModule")
 
 
 def __getattr__(name):

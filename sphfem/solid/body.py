@@ -21,8 +21,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from sphfem.solid.constitutive import cauchy_stress, pk1_stress, von_mises
-from sphfem.solid.forces import hourglass_forces, pair_forces_2d, stress_forces
+from sphfem.solid.constitutive import cauchy_stress, pk1_stress, strain_energy, von_mises
+from sphfem.solid.forces import (
+    hourglass_energy,
+    hourglass_forces,
+    pair_forces_2d,
+    stress_forces,
+)
 from sphfem.solid.kinematics import deformation_gradient
 from sphfem.solid.reference import build_reference
 
@@ -43,7 +48,8 @@ class SolidBody:
     """TL-SPH body.  ``X`` (n, dim) reference positions [m], ``vol`` V0 [m^dim], ``rho``
     [kg/m^3], Lame ``lam``, ``mu`` [Pa], ``alpha`` [1/K] (scalars or per particle),
     ``dx`` the particle spacing (support R = ``support_factor`` dx), ``theta0`` the
-    stress-free temperature [K], ``hourglass`` the Ganzenmueller coefficient (0: off)."""
+    stress-free temperature [K] (scalar or per particle), ``hourglass`` the Ganzenmueller
+    coefficient (0: off)."""
 
     def __init__(self, X, vol, rho, lam, mu, alpha=0.0, dx=None, *, theta0: float = 0.0,
                  support_factor: float = 3.0, kernel: str = "wendland_c2", period=None,
@@ -65,12 +71,12 @@ class SolidBody:
             raise ValueError("TL-SPH material needs rho > 0, mu > 0 and lam + mu > 0")
         self.m = self.rho * self.ref.vol
         self.young = self.mu * (3 * self.lam + 2 * self.mu) / (self.lam + self.mu)
-        self.theta0 = float(theta0)
+        self.theta0 = float(theta0) if np.ndim(theta0) == 0 else per(theta0)
         self.hourglass = float(hourglass)
         self.damping = float(damping)
         self.x = X.copy()
         self.v = np.zeros_like(X)
-        self.theta = np.full(n, self.theta0)
+        self.theta = np.broadcast_to(np.asarray(self.theta0, float), (n,)).copy()
         self.f_ext = np.zeros_like(X)
         self.fixed = np.zeros((n, self.dim), dtype=bool)
         self.v_presc = np.zeros_like(X)
@@ -215,6 +221,21 @@ class SolidBody:
 
     def kinetic_energy(self) -> float:
         return 0.5 * float(np.sum(self.m[:, None] * self.v**2))
+
+    def hourglass_energy(self) -> float:
+        """Energy stored by the hourglass control at the last force evaluation (pseudo-
+        potential, :func:`~sphfem.solid.forces.hourglass_energy`) [J; 2D: J/m]."""
+        if self.hourglass == 0.0:
+            return 0.0
+        r = self.ref
+        return hourglass_energy(self.x, r.offsets, r.indices, r.dX, r.hgw, self.F,
+                                self.young, self.hourglass, r.period)
+
+    def strain_energy(self) -> float:
+        """Free energy sum_i V0_i v^3 W_e(E_e) of the last force evaluation [J; 2D: J/m]
+        (:func:`~sphfem.solid.constitutive.strain_energy`)."""
+        return strain_energy(self.F, self.theta - self.theta0, self.alpha, self.lam,
+                             self.mu, self.ref.vol)
 
     def diagnostics(self) -> dict:
         return {"particles": self.n, "dim": self.dim, "support_radius_m": self.ref.R,

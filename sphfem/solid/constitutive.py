@@ -128,6 +128,38 @@ def cauchy_stress(F, S):
     return out
 
 
+@njit(cache=True, fastmath=FASTMATH)
+def strain_energy(F, dtheta, alpha, lam, mu, vol):
+    """Free energy sum_i V0_i v^3 (lam/2 tr(E_e)^2 + mu E_e:E_e) of the thermo-elastic SVK
+    material (the potential of S = v S_e, see the module docstring); 2D: plane strain,
+    per unit depth."""
+    n, dim = F.shape[0], F.shape[1]
+    total = 0.0
+    E = np.zeros((3, 3))
+    for i in range(n):
+        v = 1.0 + alpha[i] * dtheta[i]
+        iv2 = 1.0 / (v * v)
+        E[:, :] = 0.0
+        for p in range(dim):
+            for q in range(dim):
+                s = 0.0
+                for k in range(dim):
+                    s += F[i, k, p] * F[i, k, q]
+                E[p, q] = 0.5 * s * iv2
+        if dim == 2:
+            E[2, 2] = 0.5 * iv2
+        tr = 0.0
+        ee = 0.0
+        for p in range(3):
+            E[p, p] -= 0.5
+            tr += E[p, p]
+        for p in range(3):
+            for q in range(3):
+                ee += E[p, q] * E[p, q]
+        total += vol[i] * v * v * v * (0.5 * lam[i] * tr * tr + mu[i] * ee)
+    return total
+
+
 def von_mises(sigma: np.ndarray) -> np.ndarray:
     """von Mises stress of (n, 3, 3) stress tensors."""
     tr = np.trace(sigma, axis1=1, axis2=2)

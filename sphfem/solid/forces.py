@@ -168,3 +168,33 @@ def pair_forces_2d(x, vol, offsets, indices, vgw, dX, hgw, B, P, F, E, alpha_hg,
                 fh1 += c * r1
         f[i, 0] = vol[i] * fs0 + c0 * fh0
         f[i, 1] = vol[i] * fs1 + c0 * fh1
+
+
+@njit(cache=True, fastmath=FASTMATH)
+def hourglass_energy(x, offsets, indices, dX, hgw, F, E, alpha_hg, period):
+    """Pseudo-potential of the hourglass forces with F frozen: per pair (alpha_hg / 16)
+    V_i V_j W0_ij (E_i + E_j) / |X_ij|^2 g^2, g = ((F_i + F_j) X_ij - 2 x_ij) . x_ij /
+    |x_ij| (the force is -d/dx of it when F and the direction are held; summed over the CSR
+    list, which holds each pair twice).  Accounts for the energy the hourglass control
+    stores in the energy balance of the diagnostics."""
+    n, dim = x.shape
+    total = 0.0
+    r = np.empty(dim)
+    for i in range(n):
+        for jj in range(offsets[i], offsets[i + 1]):
+            j = indices[jj]
+            d2 = 0.0
+            for k in range(dim):
+                r[k] = min_image(x[j, k] - x[i, k], period[k])
+                d2 += r[k] * r[k]
+            if d2 == 0.0 or hgw[jj] == 0.0:
+                continue
+            g = 0.0
+            for p in range(dim):
+                s = 0.0
+                for q in range(dim):
+                    s += (F[i, p, q] + F[j, p, q]) * dX[jj, q]
+                g += (s - 2.0 * r[p]) * r[p]
+            g /= np.sqrt(d2)
+            total += hgw[jj] * (E[i] + E[j]) * g * g
+    return alpha_hg / 32.0 * total
