@@ -135,6 +135,42 @@ def profile(threads, s, repeats, chunksize=0):
     return out
 
 
+@numba.njit(cache=True, parallel=True)
+def compact_to_R(x, offsets, indices, R):
+    """Prototype (not in sphfem): the rows of a Verlet list reduced to entries with r < R
+    (count pass + fill pass, like passes.filter_rows) -- what a per-step compaction of
+    the skin list would cost."""
+    n, dim = x.shape
+    R2 = R * R
+    cnt = np.empty(n, np.int64)
+    for i in numba.prange(n):
+        c = 0
+        for jj in range(offsets[i], offsets[i + 1]):
+            j = indices[jj]
+            d2 = 0.0
+            for k in range(dim):
+                d = x[j, k] - x[i, k]
+                d2 += d * d
+            c += d2 < R2
+        cnt[i] = c
+    off = np.zeros(n + 1, np.int64)
+    for i in range(n):
+        off[i + 1] = off[i] + cnt[i]
+    out = np.empty(off[n], indices.dtype)
+    for i in numba.prange(n):
+        k = off[i]
+        for jj in range(offsets[i], offsets[i + 1]):
+            j = indices[jj]
+            d2 = 0.0
+            for kk in range(dim):
+                d = x[j, kk] - x[i, kk]
+                d2 += d * d
+            if d2 < R2:
+                out[k] = j
+                k += 1
+    return off, out
+
+
 def list_radius_experiment(s, threads, repeats):
     """The two pair passes and the wall pass on a list of radius R vs 1.15 R."""
     from sphfem.neighbors import NeighborList
@@ -150,6 +186,8 @@ def list_radius_experiment(s, threads, repeats):
         t = {k: tmin(ks[k], repeats) for k in ("adami_wall_state", "density_gradient",
                                                 "fluid_forces")}
         t["entries"] = int(idx.shape[0])
+        if name == "1.15R":
+            t["compact_to_R"] = tmin(lambda: compact_to_R(p.x, off, idx, s.R), repeats)
         t.update(row_entries(s, nl))
         res[name] = t
     return res
