@@ -36,7 +36,7 @@ def _check(rec, ctx, path):
             ctx.error(f"{where}.mu", "missing: viscosity = \"laminar\" needs the dynamic "
                                      "viscosity mu [Pa s] (or set [fluid] viscosity = \"none\")")
         if rec.surface_tension != "none":
-            const = rec.iif_s if rec.surface_tension == "iif" else rec.akinci_gamma
+            const = {"iif": rec.iif_s, "akinci": rec.akinci_gamma}.get(rec.surface_tension)
             if const is None and m.sigma is None:
                 ctx.error(f"{where}.sigma", f"missing: surface_tension = "
                           f"\"{rec.surface_tension}\" needs the material's surface tension "
@@ -83,12 +83,20 @@ FLUID = Section("fluid", (
     Param("threads", int, 0, ge=0,
           doc="numba threads of the fluid passes (0: one below 20000 particles, else "
               "numba's default)"),
-    Param("surface_tension", str, "none", choices=("none", "iif", "akinci"),
-          doc="iif: inter-particle interaction force (Tartakovsky & Meakin 2005 with the "
-              "mass weighting of Park 2019 eq. 2.78), calibrated to the material's sigma "
+    Param("surface_tension", str, "none", choices=("none", "csf", "iif", "akinci"),
+          doc="csf (recommended): continuum surface force sigma kappa n delta_s of "
+              "Brackbill et al. (1992) in a single-phase free-surface SPH form (colour "
+              "gradient of the kernel sum, curvature from the valid normals with a "
+              "tangential-moment correction, see sphfem.fluid.surface_tension_csf), the "
+              "material's sigma used directly, checked against the Laplace pressure and "
+              "Rayleigh's droplet period; use it with alpha ~ 0.02 (damps particle-scale "
+              "surface noise at fine resolution); iif: inter-particle interaction force "
+              "(Tartakovsky & Meakin 2005 with the mass weighting of Park 2019 eq. 2.78), "
+              "calibrated to the material's sigma "
               "by the half-space integral of the pair potential; akinci: cohesion + "
               "curvature of Akinci et al. (2013), gamma from sigma by the cohesion "
-              "integral (see sphfem.fluid.surface)"),
+              "integral (see sphfem.fluid.surface); iif and akinci fail the droplet "
+              "oscillation check (sphfem validate droplet-oscillation)"),
     Param("iif_s", float, None, unit="N", positive=True, quantity="force",
           when=("surface_tension", ("iif",)),
           doc="calibration constant s of the IIF pair force (the thesis' \"1e6 N\"); "

@@ -72,3 +72,34 @@ def hydrostatic_density(depth, rho0: float, c0: float, g: float, gamma: float = 
     O(Mach^2)); particle masses stay rho0 dx^d, so the column is slightly compressed.
     """
     return density(rho0 * g * np.asarray(depth, float), rho0, c0, gamma)
+
+
+def droplet_packing(dim: int, radius: float, dx: float) -> np.ndarray:
+    """Particles filling a disc (2D) or ball (3D) of ``radius`` centred at the origin, in
+    concentric rings / shells of spacing ``radius / round(radius / dx)`` (the outer layer at
+    radius - dx/2), so that the surface is smooth rather than a lattice staircase.
+
+    2D: ring k at r_k = (k + 1/2) dx with round(2 pi r_k / dx) particles (alternate rings
+    rotated by half a spacing); 3D: shell k at r_k with round(4 pi r_k^2 / dx^2) particles
+    on a Fibonacci spiral (rotated by k radians from shell to shell).
+    """
+    nr = max(1, int(round(radius / dx)))
+    dx = radius / nr
+    pts = []
+    golden = np.pi * (3.0 - np.sqrt(5.0))
+    for k in range(nr):
+        r = (k + 0.5) * dx
+        if dim == 2:
+            m = max(1, int(round(2 * np.pi * r / dx)))
+            th = (np.arange(m) + 0.5 * (k % 2)) * 2 * np.pi / m
+            pts.append(r * np.stack([np.cos(th), np.sin(th)], 1))
+        elif dim == 3:
+            m = max(1, int(round(4 * np.pi * r * r / dx**2)))
+            s = np.arange(m) + 0.5
+            z = 1.0 - 2.0 * s / m
+            rho = np.sqrt(1.0 - z * z)
+            phi = golden * s + k
+            pts.append(r * np.stack([rho * np.cos(phi), rho * np.sin(phi), z], 1))
+        else:
+            raise ValueError(f"droplet_packing: dim must be 2 or 3, got {dim}")
+    return np.ascontiguousarray(np.concatenate(pts))

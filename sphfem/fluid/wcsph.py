@@ -42,7 +42,7 @@ import numpy as np
 from numba import njit, prange
 
 from sphfem import kernels
-from sphfem.fluid import passes, surface
+from sphfem.fluid import passes, surface, surface_tension_csf
 from sphfem.fluid.eos import tait_B
 from sphfem.fluid.guards import check_fluid
 from sphfem.fluid.walls_adami2012 import adami_wall_state
@@ -104,8 +104,9 @@ class FluidParams:
     threads    numba threads for the fluid passes (0: automatic -- one thread below
                ``SERIAL_BELOW`` particles, where thread start-up costs more than it saves,
                numba's default above)
-    surface_tension  "none", "iif" (Park 2019 eq. 2.78) or "akinci" (Akinci et al. 2013);
-               see :mod:`sphfem.fluid.surface`
+    surface_tension  "none", "csf" (continuum surface force, recommended; see
+               :mod:`sphfem.fluid.surface_tension_csf`), "iif" (Park 2019 eq. 2.78) or
+               "akinci" (Akinci et al. 2013); see :mod:`sphfem.fluid.surface`
     sigma      physical surface tension [N/m] (calibrates the model's constant)
     iif_s      IIF calibration constant s [N] (None: from sigma, :func:`surface.iif_constant`)
     akinci_gamma  Akinci coefficient [m^(dim+1)/(kg s^2)] (None: from sigma)
@@ -151,12 +152,12 @@ class FluidParams:
         lo, hi = self.rho_ratio_band
         if not 0 < lo < 1 < hi:
             raise ValueError(f"rho_ratio_band must satisfy 0 < lo < 1 < hi, got {(lo, hi)}")
-        if self.surface_tension not in ("none", "iif", "akinci"):
+        if self.surface_tension not in ("none", "iif", "akinci", "csf"):
             raise ValueError(f"unknown surface_tension model {self.surface_tension!r}")
         if self.shifting not in ("none", "interior", "all"):
             raise ValueError(f"unknown shifting mode {self.shifting!r}")
         if self.surface_tension != "none":
-            const = self.iif_s if self.surface_tension == "iif" else self.akinci_gamma
+            const = {"iif": self.iif_s, "akinci": self.akinci_gamma}.get(self.surface_tension)
             if const is None and not self.sigma > 0:
                 raise ValueError(f"surface_tension = {self.surface_tension!r} needs sigma > 0 "
                                  "[N/m] or its calibration constant")
@@ -341,6 +342,7 @@ class FluidSolver:
         self.last_fallbacks = 0
         self.guard_message = ""
         self._scratch = None
+        self._csf = None
         self._xref = None
         if self.params.threads:
             self.nthreads = self.params.threads
@@ -478,6 +480,10 @@ class FluidSolver:
             surface.akinci_accel(p.x, p.m, p.rho, p.kind, nl.offsets, nl.indices, self.R,
                                  self.st_constant, pa.rho0, self.m_bar, self.period, s.nrm,
                                  p.acc)
+        elif pa.surface_tension == "csf":
+            self._csf = surface_tension_csf.csf_state(self._csf, p.n, self.dim)
+            self._csf.accumulate(p.x, s.V, p.rho, p.kind, nl.offsets, nl.indices, self.R,
+                                 self.sigma, self.kkind, self.period, self.st_sigma, p.acc)
         if pa.uses_free_surface:
             surface.free_surface(p.x, s.V, p.kind, nl.offsets, nl.indices, self.R,
                                  self.sigma, self.kkind, self.period, pa.cond_max, s.gc,
