@@ -416,6 +416,8 @@ def import_for(name: str) -> None:
     """Import what registers module/section ``name``: ``sphfem.<name>`` and its target."""
     if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", name or ""):
         return
+    if name in EXTRA_PACKAGES and importlib.util.find_spec(name) is not None:
+        importlib.import_module(name)  # top-level packages such as ``coupling``
     pkg = f"sphfem.{name}"
     spec = importlib.util.find_spec(pkg) if name not in _NOT_PHYSICS else None
     if spec is not None and spec.submodule_search_locations is not None:  # a package

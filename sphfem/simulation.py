@@ -180,6 +180,7 @@ class Simulation:
         from tqdm import tqdm
 
         out = Path(out)
+        self.out = out  # modules that write their own files (the coupling) look here
         t_end = self.scene.time.t_end
         max_steps = self.scene.time.max_steps
         every = self.scene.output.every

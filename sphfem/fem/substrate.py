@@ -548,7 +548,7 @@ class FEMSubstrate:
 
     # ------------------------------------------------------------------ solve
     def solve(self, dT_nodal=None, tractions=None, point_forces=None, body_force=None,
-              T_nodal=None, snap: str | None = "top") -> FEMResult:
+              T_nodal=None, snap: str | None = "top", load=None) -> FEMResult:
         """Solve K u = f for this step's loads (K is not refactorised).
 
         dT_nodal : temperature change: scalar, vertex array, scalar-dof array or callable.
@@ -557,6 +557,7 @@ class FEMSubstrate:
         point_forces : ``(points, forces)``, each (n, dim) [m, N]; points are snapped onto
             the facet group ``snap`` (None: used as given).
         body_force : constant (dim,) or callable of x [N/m^3].
+        load : a ready nodal load vector (e.g. a coupling transfer's P^T F), added as is.
         """
         t0 = time.perf_counter()
         if T_nodal is not None:
@@ -574,6 +575,8 @@ class FEMSubstrate:
             f += self.point_force_load(*point_forces, snap=snap)
         if body_force is not None:
             f += self.body_force_load(body_force)
+        if load is not None:
+            f += np.asarray(load, dtype=float)
         t1 = time.perf_counter()
         u = self.basis.zeros()
         info = {"assemble_load_s": t1 - t0}
