@@ -47,6 +47,13 @@ Surface tension, two models (both act between fluid particles only; no wall adhe
   curvature-dependent force, is not in the calibration -- the droplet validation reports
   the resulting error.
 
+  Not recommended: in the 2D droplet of ``sphfem validate droplet-oscillation`` (full run)
+  it stops on the speed guard within the first few steps; the cause (the normalisation of
+  the cohesion kernel or the scaling of the curvature term above) has not been isolated.
+  ``iif`` is stable but responds elasto-plastically (period off by ~40 % in 3D).  Use
+  ``csf`` (:mod:`sphfem.fluid.surface_tension_csf`), which passes the droplet and Laplace
+  checks.
+
 Free surface (Marrone et al. 2010): lambda_i, the smallest eigenvalue of the moment matrix
 M_i = sum_j V_j r (x) grad_i W_ij (= I in the bulk), over fluid and wall neighbours;
 lambda <= 0.2: free surface; 0.2 < lambda <= 0.75: free surface unless a neighbour lies

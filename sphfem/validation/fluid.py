@@ -369,8 +369,10 @@ def droplet_case(quick: bool = False) -> CaseResult:
              "shape moment D.",
              "Criterion on the CSF model (surface_tension = \"csf\", the recommended one).  "
              "The IIF (eq. 2.78, calibrated from sigma) and Akinci rows are reported "
-             "variants: the IIF droplet responds elasto-plastically (D_min/D_max > 0 or a "
-             "too short period), the Akinci model is unstable (see sphfem.fluid.surface).",
+             "variants ('status' in --json): from this start the IIF 2D run and the Akinci "
+             "run stop on the speed guard within the first 50 steps, the IIF 3D droplet "
+             "never oscillates through the sphere (D does not change sign: the "
+             "elasto-plastic response of the pair-force lattice); see sphfem.fluid.surface.",
              "'com_drift_over_R' and 'momentum_over_M_V0' measure the CSF's lack of exact "
              "momentum conservation (0 for the pairwise IIF / Akinci forces)."]
     return CaseResult("droplet-oscillation", runs, criteria=crit, notes=notes,
