@@ -123,20 +123,28 @@ def bench_ours(build, threads: int, blocks: int = 3, block_seconds: float = 2.0,
     per = time.perf_counter() - t0
     steps = max(min_steps, int(round(block_seconds / max(per, 1e-9))))
     times = []
+    ctimes = []
     for _ in range(blocks):
         t0 = time.perf_counter()
+        c0 = time.process_time()
         for _ in range(steps):
             one_step()
         times.append((time.perf_counter() - t0) / steps)
+        ctimes.append((time.process_time() - c0) / steps)
     step_s = min(times)
+    cpu_step_s = min(ctimes)
     s.params.skin = FluidParams.skin
     s.params.sort_every = 0
     bt = []
+    cbt = []
     for _ in range(3):
         t0 = time.perf_counter()
+        c0 = time.process_time()
         s.rebuild_neighbors()
         bt.append(time.perf_counter() - t0)
+        cbt.append(time.process_time() - c0)
     build_s = min(bt)
+    cpu_build_s = min(cbt)
     nl = s.nbrs
     pairs = int(_pairs_within(s.p.x, nl.offsets, nl.indices, s.R, s.p.kind))
     n = int(s.p.n)
@@ -149,7 +157,9 @@ def bench_ours(build, threads: int, blocks: int = 3, block_seconds: float = 2.0,
         "dim": s.dim, "R": s.R, "R_over_dx": None, "pairs": pairs,
         "list_pairs": int(nl.n_pairs), "setup_s": setup_s, "steps_per_block": steps,
         "blocks": blocks, "block_step_s": times, "step_s": step_s, "build_s": build_s,
-        "step_search_s": ss,
+        "step_search_s": ss, "cpu_step_s": cpu_step_s, "cpu_build_s": cpu_build_s,
+        "cpu_step_search_s": cpu_step_s + cpu_build_s / REBUILD_EVERY,
+        "cpu_particle_steps_per_s": n / (cpu_step_s + cpu_build_s / REBUILD_EVERY),
         "particle_steps_per_s": n / ss, "pairs_per_s": pairs / ss,
         "particle_steps_per_s_no_search": n / step_s, "pairs_per_s_no_search": pairs / step_s,
         "search_share": build_s / (REBUILD_EVERY * step_s + build_s),
@@ -270,14 +280,19 @@ def main(argv=None):
                                                "build_s", "step_search_s",
                                                "particle_steps_per_s", "pairs_per_s",
                                                "particle_steps_per_s_no_search",
-                                               "pairs_per_s_no_search", "loadavg_start")},
+                                               "pairs_per_s_no_search", "loadavg_start",
+                                               "cpu_step_search_s",
+                                               "cpu_particle_steps_per_s")},
                     "pysph": {k: p[k] for k in ("n_fluid", "n_total", "pairs", "step_s",
                                                 "evals_per_step", "particle_steps_per_s",
                                                 "pairs_per_s", "pair_evals_per_s",
-                                                "loadavg_start", "command")},
+                                                "loadavg_start", "command", "cpu_step_s",
+                                                "cpu_particle_steps_per_s")},
                     "ratio_particle_steps": ratio(o["particle_steps_per_s"],
                                                   p["particle_steps_per_s"]),
                     "ratio_pairs": ratio(o["pairs_per_s"], p["pairs_per_s"]),
+                    "ratio_cpu_particle_steps": ratio(o["cpu_particle_steps_per_s"],
+                                                      p["cpu_particle_steps_per_s"]),
                     "ratio_particle_steps_no_search": ratio(
                         o["particle_steps_per_s_no_search"], p["particle_steps_per_s"]),
                     "ratio_pairs_no_search": ratio(o["pairs_per_s_no_search"],
@@ -312,15 +327,18 @@ def markdown(res, a) -> str:
              "PySPH 2 h = 2.6 dx); *pairs/s* = pairs x steps / seconds; *particle-steps/s* "
              "= all particles (walls included) x steps / seconds.  Ours includes the "
              "neighbour rebuild amortised over 4 steps (`+search`); the `no search` ratio "
-             "uses the bare step.  PySPH's dam_break_3d uses EPECIntegrator (2 "
+             "uses the bare step.  *CPU-time ratio*: the same ratio from process CPU "
+             "time (all threads) instead of wall time -- on 1 thread nearly independent of "
+             "the other processes on the machine; on 2 threads it counts OpenMP "
+             "spin-waiting.  PySPH's dam_break_3d uses EPECIntegrator (2 "
              "acceleration evaluations per step), dam_break_2d PECIntegrator (1); ours "
              "always 1 evaluation (2 pair passes + the wall-state pass).\n")
     L.append("| case | threads | ours R | fluid ours / PySPH | total ours / PySPH | "
              "pairs/particle ours / PySPH | ours ms/step (+search) | PySPH ms/step | "
              "ours particle-steps/s | PySPH particle-steps/s | **ratio p-steps** | "
              "ours pairs/s | PySPH pairs/s | **ratio pairs/s** | ratios no search "
-             "(p-steps, pairs) | load avg ours; PySPH |")
-    L.append("|" + "---|" * 16)
+             "(p-steps, pairs) | CPU-time ratio p-steps | load avg ours; PySPH |")
+    L.append("|" + "---|" * 17)
     for r in res["comparison"]:
         o, p = r["ours"], r["pysph"]
         L.append(
@@ -332,6 +350,7 @@ def markdown(res, a) -> str:
             f"{p['particle_steps_per_s']:.3e} | **{r['ratio_particle_steps']:.2f}** | "
             f"{o['pairs_per_s']:.3e} | {p['pairs_per_s']:.3e} | **{r['ratio_pairs']:.2f}** | "
             f"{r['ratio_particle_steps_no_search']:.2f}, {r['ratio_pairs_no_search']:.2f} | "
+            f"{r.get('ratio_cpu_particle_steps', float('nan')):.2f} | "
             f"{o['loadavg_start']}; {p['loadavg_start']} |")
     L.append("\nPySPH pair-evaluations/s (pairs x evaluations per step / s): " + ", ".join(
         f"{r['name']} t={r['threads']}: {r['pysph']['pair_evals_per_s']:.3e}"

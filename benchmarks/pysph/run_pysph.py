@@ -3,9 +3,10 @@
 
 Run it with the Python of a venv that has PySPH (``pip install pysph scipy``), e.g.::
 
-    OMP_NUM_THREADS is set per run by this script; do not set it yourself.
     /tmp/pysph-venv/bin/python benchmarks/pysph/run_pysph.py \
         --case dam_break_2d --dx 0.01 --threads 1 2 --json out.json
+
+(``OMP_NUM_THREADS`` is set per worker by this script.)
 
 Every (case, dx, threads) runs in a fresh worker process (``--worker``) so that
 ``OMP_NUM_THREADS`` is set before OpenMP starts.  The worker builds the example's
@@ -35,6 +36,10 @@ Definitions (the same as ``sphfem.fluid.bench``):
   from fluids; Continuity/Momentum for fluid from all; XSPH fluid-fluid);
 * ``pairs_per_s = pairs / step_s`` and ``particle_steps_per_s = n_total / step_s``
   (all particles, walls included);
+* ``cpu_step_s`` -- process CPU time (all threads, ``time.process_time``) per step, minimum
+  over blocks; on 1 thread it is insensitive to other processes on a shared machine
+  (``cpu_particle_steps_per_s = n_total / cpu_step_s``); on 2 threads it includes OpenMP
+  spin-waiting;
 * ``evals_per_step`` -- acceleration evaluations per step of the integrator
   (PECIntegrator: 1 for dam_break_2d; EPECIntegrator: 2 for dam_break_3d), and
   ``pair_evals_per_s = pairs * evals_per_step / step_s``.
@@ -125,10 +130,12 @@ def worker(a) -> dict:
 
     solver = app.solver
     stamps: list[float] = []
+    cpu: list[float] = []  # process CPU time (all threads) at the same instants
     state = {"end": None}
 
     def cb(s):
         stamps.append(time.perf_counter())
+        cpu.append(time.process_time())
         k = len(stamps)
         if k == a.warmup and state["end"] is None:
             # per-step time of the warm-up's second half, to size the timed blocks
@@ -145,12 +152,15 @@ def worker(a) -> dict:
     solve_s = time.perf_counter() - t1
     steps = state["steps"]
     blocks = []
+    cblocks = []
     for b in range(a.blocks):
         i0 = a.warmup - 1 + b * steps
         i1 = i0 + steps
         if i1 < len(stamps):
             blocks.append((stamps[i1] - stamps[i0]) / steps)
+            cblocks.append((cpu[i1] - cpu[i0]) / steps)
     step_s = min(blocks)
+    cpu_step_s = min(cblocks)
     n_total = sum(n_by.values())
     nf = sum(v for k, v in n_by.items() if k in fluids)
     evals = EVALS_PER_STEP.get(integ, 1)
@@ -166,7 +176,9 @@ def worker(a) -> dict:
         "setup_s": setup_s, "solve_s": solve_s, "warmup_steps": a.warmup,
         "steps_per_block": steps, "blocks": len(blocks), "block_step_s": blocks,
         "step_s": step_s,
+        "cpu_step_s": cpu_step_s, "block_cpu_step_s": cblocks,
         "particle_steps_per_s": n_total / step_s,
+        "cpu_particle_steps_per_s": n_total / cpu_step_s,
         "pairs_per_s": pc["pairs"] / step_s,
         "pair_evals_per_s": pc["pairs"] * evals / step_s,
         "finite_after_run": bool(fin_ok),
