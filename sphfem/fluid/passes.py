@@ -189,14 +189,70 @@ def _invert(M, dim, Binv, cond_max):
     return c <= cond_max and np.isfinite(c)
 
 
+@njit(cache=True, inline="always")
+def _emit_other_row(x, kind, i, offsets, indices, R2, dim, period, periodic, nb):
+    """Compact a non-fluid row: a wall keeps its fluid neighbours with 0 < r < R."""
+    if kind[i] != WALL:
+        return 0
+    c = 0
+    o = offsets[i]
+    for jj in range(o, offsets[i + 1]):
+        j = indices[jj]
+        if kind[j] != FLUID:
+            continue
+        r0, r1, r2 = _sep(x, i, j, dim, period, periodic)
+        d2 = r0 * r0 + r1 * r1 + r2 * r2
+        if d2 >= R2 or d2 == 0.0:
+            continue
+        nb[o + c] = j
+        c += 1
+    return c
+
+
+@njit(cache=True, parallel=True, fastmath=FASTMATH)
+def compact_rows(x, kind, offsets, indices, R, period, nb, cnt):
+    """In-range rows of the fluid's view: ``nb[offsets[i] : offsets[i] + cnt[i]]``.
+
+    Fluid rows keep their neighbours with 0 < r < R, wall rows their fluid neighbours with
+    0 < r < R, other rows nothing -- exactly the pairs :func:`fluid_forces` would not skip
+    (same order, so the sums are bit-identical).  Written into the rows' own slots of
+    ``nb`` (a fluid-owned buffer shaped like ``indices``; no prefix sum).  Used when
+    :func:`density_gradient`, which emits the same rows, does not run.
+    """
+    n, dim = x.shape
+    R2 = R * R
+    periodic = False
+    for k in range(dim):
+        periodic |= period[k] > 0.0
+    for i in prange(n):
+        if kind[i] != FLUID:
+            cnt[i] = _emit_other_row(x, kind, i, offsets, indices, R2, dim, period, periodic,
+                                     nb)
+            continue
+        c = 0
+        o = offsets[i]
+        for jj in range(o, offsets[i + 1]):
+            j = indices[jj]
+            r0, r1, r2 = _sep(x, i, j, dim, period, periodic)
+            d2 = r0 * r0 + r1 * r1 + r2 * r2
+            if d2 >= R2 or d2 == 0.0:
+                continue
+            nb[o + c] = j
+            c += 1
+        cnt[i] = c
+
+
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
 def density_gradient(x, rho, V, kind, offsets, indices, R, sigma, kkind, period, cond_max,
-                     grad, ok):
+                     grad, ok, nb, cnt):
     """Renormalised density gradient of every fluid particle (rows of others are zeroed).
 
     Sums over all interacting neighbours (fluid and wall).  Where the moment matrix is
     singular or worse conditioned than ``cond_max`` (free surface, sparse splashes),
     ``ok[i] = False`` and the plain difference gradient is used.
+
+    Also compacts the rows as :func:`compact_rows` does (``nb``, ``cnt``), from the pair
+    distances it computes anyway: the later passes then visit only the in-range pairs.
     """
     n, dim = x.shape
     R2 = R * R
@@ -209,7 +265,11 @@ def density_gradient(x, rho, V, kind, offsets, indices, R, sigma, kkind, period,
             for k in range(dim):
                 grad[i, k] = 0.0
             ok[i] = True
+            cnt[i] = _emit_other_row(x, kind, i, offsets, indices, R2, dim, period, periodic,
+                                     nb)
             continue
+        c = 0
+        o = offsets[i]
         m00 = 0.0
         m01 = 0.0
         m02 = 0.0
@@ -226,6 +286,8 @@ def density_gradient(x, rho, V, kind, offsets, indices, R, sigma, kkind, period,
             d2 = r0 * r0 + r1 * r1 + r2 * r2
             if d2 >= R2 or d2 == 0.0:
                 continue
+            nb[o + c] = j
+            c += 1
             s = V[j] * _F(np.sqrt(d2), R, fac2, kkind)  # V_j F
             t = s * (rho[j] - ri)
             g0 += t * r0
@@ -237,6 +299,7 @@ def density_gradient(x, rho, V, kind, offsets, indices, R, sigma, kkind, period,
             m11 += s * r1 * r1
             m12 += s * r1 * r2
             m22 += s * r2 * r2
+        cnt[i] = c
         M = np.empty((3, 3))
         M[0, 0] = m00
         M[0, 1] = m01
@@ -304,17 +367,19 @@ def _psep(P, i, j, period, periodic):
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
-def fluid_forces(P, kind, offsets, indices, R, sigma, kkind, period, gravity, eps2, delta_coef,
-                 art_coef, acc, drho, f_wall):
+def fluid_forces(P, kind, offsets, cnt, indices, R, sigma, kkind, period, gravity, eps2,
+                 delta_coef, art_coef, acc, drho, f_wall):
     """Accelerations and density rates of fluid particles; fluid forces on wall particles.
 
-    ``P`` holds the packed rows of :func:`pack_rows`.  ``eps2`` is the viscous regulariser
-    (eps_visc h^2), ``delta_coef = delta h c0`` (0: no diffusive term), ``art_coef = alpha h
-    c0`` (0: no artificial viscosity; Monaghan 1992 in the always-on form of Marrone et al.
-    2011, symmetrised: pair acceleration 2 m_j alpha h c0 / (rho_i + rho_j) (u_ji . r) r F /
-    (r^2 + eps2)).  Fluid rows of ``acc`` (m/s^2) and ``drho`` (kg/m^3/s) and wall rows of
-    ``f_wall`` (N) are written; other rows are zeroed (a wall's ``acc``, its prescribed
-    acceleration, is left alone).
+    ``P`` holds the packed rows of :func:`pack_rows`; row i's neighbours are
+    ``indices[offsets[i] : offsets[i] + cnt[i]]`` (the compacted rows of :func:`compact_rows` /
+    :func:`density_gradient`, or a full list with ``cnt = diff(offsets)``: pairs beyond R are
+    skipped either way).  ``eps2`` is the viscous regulariser (eps_visc h^2), ``delta_coef =
+    delta h c0`` (0: no diffusive term), ``art_coef = alpha h c0`` (0: no artificial viscosity;
+    Monaghan 1992 in the always-on form of Marrone et al. 2011, symmetrised: pair acceleration 2
+    m_j alpha h c0 / (rho_i + rho_j) (u_ji . r) r F / (r^2 + eps2)).  Fluid rows of ``acc``
+    (m/s^2) and ``drho`` (kg/m^3/s) and wall rows of ``f_wall`` (N) are written; other rows are
+    zeroed (a wall's ``acc``, its prescribed acceleration, is left alone).
     """
     n = P.shape[0]
     dim = acc.shape[1]
@@ -350,7 +415,7 @@ def fluid_forces(P, kind, offsets, indices, R, sigma, kkind, period, gravity, ep
             gi0 = P[i, _G]
             gi1 = P[i, _G + 1]
             gi2 = P[i, _G + 2]
-            for jj in range(offsets[i], offsets[i + 1]):
+            for jj in range(offsets[i], offsets[i] + cnt[i]):
                 j = indices[jj]
                 mj = P[j, _M]
                 r0, r1, r2 = _psep(P, i, j, pp, periodic)
@@ -395,7 +460,7 @@ def fluid_forces(P, kind, offsets, indices, R, sigma, kkind, period, gravity, ep
             wi0 = P[i, _VG]
             wi1 = P[i, _VG + 1]
             wi2 = P[i, _VG + 2]
-            for jj in range(offsets[i], offsets[i + 1]):
+            for jj in range(offsets[i], offsets[i] + cnt[i]):
                 j = indices[jj]
                 if P[j, _ISF] == 0.0:
                     continue

@@ -288,6 +288,7 @@ class _Scratch:
         self.fs = np.zeros(n, dtype=np.int8)
         self.near = np.zeros(n, dtype=np.bool_)
         self.P = np.zeros((n, passes.NPACK))
+        self.cnt = np.zeros(n, dtype=np.int64)
         self.ok = np.ones(n, dtype=np.bool_)
 
 
@@ -342,6 +343,11 @@ class FluidSolver:
         self.last_fallbacks = 0
         self.guard_message = ""
         self._scratch = None
+        self._nb_buf = None
+        self._nb = None
+        #: run the force pass over the in-range rows compacted by the density-gradient
+        #: pass (False: over the full filtered Verlet list; same results, for tests)
+        self.compact_rows = True
         self._csf = None
         self._xref = None
         if self.params.threads:
@@ -385,7 +391,18 @@ class FluidSolver:
     def _set_view(self, nl: NeighborList) -> None:
         """Filtered view of ``nl`` for the passes; (re)size the scratch arrays."""
         off, idx = passes.filter_rows(nl.offsets, nl.indices, self.p.kind)
-        self.nbrs = NeighborList(off, idx, nl.radius, nl.period)
+        self._set_filtered(NeighborList(off, idx, nl.radius, nl.period))
+
+    def _set_filtered(self, nl: NeighborList) -> None:
+        """Take ``nl`` (already the fluid's filtered view) and size the work buffers: the
+        in-range rows that the density-gradient pass compacts at every evaluation go into
+        ``_nb`` (same shape as ``nl.indices``, grown with 25 % headroom, never the shared
+        list)."""
+        self.nbrs = nl
+        m = nl.indices.shape[0]
+        if self._nb_buf is None or self._nb_buf.shape[0] < m:
+            self._nb_buf = np.empty(m + m // 4, dtype=nl.indices.dtype)
+        self._nb = self._nb_buf[:m]
         self.n_rebuilds += 1
         if self._scratch is None or self._scratch.n != self.p.n:
             self._scratch = _Scratch(self.p.n, self.dim)
@@ -461,13 +478,19 @@ class FluidSolver:
                          self.kkind, self.period, g, pa.rho0, self.B, pa.gamma, s.vg)
         passes.prepare_all(p.rho, p.p, p.m, p.vol, p.kind, s.pr, s.V, s.meff, s.isf)
         delta_coef = pa.delta * self.h * pa.c0
+        nb, cnt = self._nb, s.cnt  # in-range rows (fluid-owned buffer, shared list untouched)
         if delta_coef > 0 or pa.shifting != "none":
             passes.density_gradient(p.x, p.rho, s.V, p.kind, nl.offsets, nl.indices, self.R,
                                     self.sigma, self.kkind, self.period, pa.cond_max, s.grad,
-                                    s.ok)
+                                    s.ok, nb, cnt)
             self.last_fallbacks = int(np.count_nonzero(~s.ok))
+        else:
+            passes.compact_rows(p.x, p.kind, nl.offsets, nl.indices, self.R, self.period, nb,
+                                cnt)
+        if not self.compact_rows:  # reference path: the full view (tests, profiling)
+            nb, cnt = nl.indices, np.diff(nl.offsets)
         passes.pack_rows(p.x, p.v, s.vg, p.rho, s.pr, s.V, s.meff, s.isf, p.mu, s.grad, s.P)
-        passes.fluid_forces(s.P, p.kind, nl.offsets, nl.indices, self.R, self.sigma,
+        passes.fluid_forces(s.P, p.kind, nl.offsets, cnt, nb, self.R, self.sigma,
                             self.kkind, self.period, g, pa.eps_visc * self.h * self.h,
                             delta_coef, pa.alpha * self.h * pa.c0, p.acc, p.drho, p.f_fluid)
         if pa.surface_tension == "iif":
