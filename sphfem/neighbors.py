@@ -405,16 +405,41 @@ def _compact(hit8, cj, m, buf):
     return np.int64(k)
 
 
+@njit(cache=True, inline="always")
+def _kind_hits(xi0, xi1, xi2, cx0, cx1, cx2, cb, rm, m, r2max, hit):
+    """Hit mask of the candidates within r2max whose kind bit is in ``rm``."""
+    for q in range(np.uint64(m)):
+        d0 = xi0 - cx0[q]
+        d1 = xi1 - cx1[q]
+        d2 = xi2 - cx2[q]
+        hit[q] = (d0 * d0 + d1 * d1 + d2 * d2 <= r2max) & ((cb[q] & rm) != 0)
+
+
+@njit(cache=True, inline="always")
+def _kind_count(xi0, xi1, xi2, cx0, cx1, cx2, cb, rm, m, r2max):
+    """Number of candidates within r2max whose kind bit is in ``rm`` (self included)."""
+    k = 0
+    for q in range(np.uint64(m)):
+        d0 = xi0 - cx0[q]
+        d1 = xi1 - cx1[q]
+        d2 = xi2 - cx2[q]
+        k += (d0 * d0 + d1 * d1 + d2 * d2 <= r2max) & ((cb[q] & rm) != 0)
+    return k
+
+
 @njit(cache=True, parallel=True)
-def _cell_pass(xs, order, cell_start, ncell, reach, period, r2max, maxcand, offsets, out):
+def _cell_pass(xs, order, cell_start, ncell, reach, period, r2max, maxcand, offsets, out,
+               kind, keep):
     """Count (``out`` empty; returns counts, self excluded) or fill the CSR segments.
 
     Each particle writes only its own segment (via a per-chunk scratch row: the branch-free
     compaction stores one slot past the last hit), so the pass is race free, and the
-    result does not depend on the thread count.
+    result does not depend on the thread count.  With a non-empty ``kind``, row i keeps
+    only the neighbours j whose kind bit is set in ``keep[kind[i]]``.
     """
     n = order.shape[0]
     fill = out.shape[0] > 0
+    use_kind = kind.shape[0] > 0
     ncells = cell_start.shape[0] - 1
     counts = np.zeros(n, dtype=np.int64)
     # chunks of consecutive cells holding about equal numbers of particles (empty regions
@@ -430,6 +455,7 @@ def _cell_pass(xs, order, cell_start, ncell, reach, period, r2max, maxcand, offs
         buf = np.empty(maxcand + 8 if fill else 0, dtype=np.int32)
         hit = np.zeros(maxcand + 8 if fill else 8, dtype=np.uint8)
         hit8 = hit[: 8 * (hit.shape[0] // 8)].view(np.uint64)
+        cb = np.zeros(maxcand + 8 if use_kind else 0, dtype=np.uint8)
         cx0 = cx[0]
         cx1 = cx[1]
         cx2 = cx[2]
@@ -441,19 +467,35 @@ def _cell_pass(xs, order, cell_start, ncell, reach, period, r2max, maxcand, offs
             )
             if fill:
                 hit[m : m + 8] = 0  # padding of the last 8-candidate word
+            if use_kind:
+                for q in range(m):
+                    cb[q] = np.uint8(1) << kind[cj[q]]
             for p in range(cell_start[c], cell_start[c + 1]):
                 i = order[p]
                 xi0 = xs[0, p]
                 xi1 = xs[1, p]
                 xi2 = xs[2, p]
                 k = 0
-                if fill:
+                if use_kind:
+                    rm = keep[kind[i]]
+                    if rm == 0:
+                        counts[i] = 0
+                        continue
+                    if fill:
+                        _kind_hits(xi0, xi1, xi2, cx0, cx1, cx2, cb, rm, m, r2max, hit)
+                    else:
+                        k = _kind_count(xi0, xi1, xi2, cx0, cx1, cx2, cb, rm, m, r2max)
+                        k -= ((np.uint8(1) << kind[i]) & rm) != 0  # self
+                        counts[i] = k
+                        continue
+                elif fill:
                     # vectorised hit mask, then a compaction that skips 8 misses at a time
                     for q in range(np.uint64(m)):
                         d0 = xi0 - cx0[q]
                         d1 = xi1 - cx1[q]
                         d2 = xi2 - cx2[q]
                         hit[q] = d0 * d0 + d1 * d1 + d2 * d2 <= r2max
+                if fill:
                     hit[q_own + p - cell_start[c]] = 0  # self
                     k = _compact(hit8, cj, m, buf)
                     base = np.uint64(offsets[i])
@@ -478,7 +520,7 @@ def _cell_pass(xs, order, cell_start, ncell, reach, period, r2max, maxcand, offs
 
 
 def build_neighbor_list(
-    x, radius, lo, hi, period=None, *, cells_per_radius: int = 1
+    x, radius, lo, hi, period=None, *, cells_per_radius: int = 1, kind=None, keep=None
 ) -> NeighborList:
     """All pairs with ``|x_i - x_j| <= radius`` (minimum image on periodic axes), in CSR form.
 
@@ -493,6 +535,11 @@ def build_neighbor_list(
         Requires ``radius < period / 2`` on every periodic axis.
     cells_per_radius : cells per search radius (1: cell = R, 27 cells visited in 3D,
         the fastest here; 2: cell = R/2, 125 smaller cells, about 2x slower).
+
+    kind, keep : optional pair filter applied while the list is built (no second pass):
+        ``kind`` (n,) integer kinds in 0..7, ``keep`` a sequence of bit masks indexed by
+        kind -- row i keeps neighbour j only if bit ``kind[j]`` of ``keep[kind[i]]`` is set
+        (rows of kinds beyond ``keep`` or with mask 0 are empty).
 
     Returns a :class:`NeighborList` (self excluded, ``r <= radius`` included, segments
     ascending).  Fastest on a set sorted with :func:`cell_sort_permutation` (same
@@ -531,13 +578,30 @@ def build_neighbor_list(
     r2max = radius * radius
     maxcand = _max_candidates(cell_start, g.ncell, g.reach, g.period)
     args = (xs, order32, cell_start, g.ncell, g.reach, g.period, r2max, maxcand)
+    kinds, keeps = _pair_filter(kind, keep, n)
     offsets = np.zeros(n + 1, dtype=np.int64)
-    counts = _cell_pass(*args, offsets, np.zeros(0, np.int32))
+    counts = _cell_pass(*args, offsets, np.zeros(0, np.int32), kinds, keeps)
     np.cumsum(counts, out=offsets[1:])
     indices = np.empty(int(offsets[-1]), dtype=np.int32)
     if indices.shape[0]:
-        _cell_pass(*args, offsets, indices)
+        _cell_pass(*args, offsets, indices, kinds, keeps)
     return NeighborList(offsets, indices, radius, period)
+
+
+def _pair_filter(kind, keep, n):
+    """(kind as int64 or empty, 8 uint8 masks) for :func:`_cell_pass`."""
+    if kind is None:
+        return np.zeros(0, np.int64), np.zeros(8, np.uint8)
+    kind = np.ascontiguousarray(kind, dtype=np.int64)
+    if kind.shape != (n,):
+        raise ValueError(f"kind must have shape ({n},), got {kind.shape}")
+    if n and (kind.min() < 0 or kind.max() > 7):
+        raise ValueError("pair filter: kinds must lie in 0..7")
+    masks = np.zeros(8, np.uint8)
+    if keep is None or len(keep) > 8:
+        raise ValueError("pair filter: give keep, at most 8 bit masks (one per kind)")
+    masks[: len(keep)] = np.asarray(keep, dtype=np.uint8)
+    return kind, masks
 
 
 @njit(cache=True)

@@ -257,3 +257,27 @@ def test_clustered_with_empty_regions():
     nl = build_neighbor_list(x, 0.02, np.zeros(3), np.ones(3), np.zeros(3))
     check_structure(nl, x.shape[0])
     assert pair_set(nl) == reference_pairs(x, 0.02)
+
+
+@pytest.mark.parametrize("dim,periodic", [(2, False), (3, False), (3, True)])
+def test_kind_filter_matches_filter_rows(dim, periodic):
+    from sphfem.fluid.passes import VIEW_KEEP, filter_rows
+
+    rng = np.random.default_rng(7)
+    n = 1500 if dim == 3 else 800
+    L = 10.0
+    x = rng.uniform(0.0, L, (n, dim))
+    kind = rng.integers(0, 4, n).astype(np.int8)
+    period = np.full(dim, L if periodic else 0.0)
+    radius = 1.7
+    full = build_neighbor_list(x, radius, np.zeros(dim), np.full(dim, L), period)
+    off, idx = filter_rows(full.offsets, full.indices, kind)
+    nl = build_neighbor_list(x, radius, np.zeros(dim), np.full(dim, L), period, kind=kind,
+                             keep=VIEW_KEEP)
+    assert np.array_equal(nl.offsets, off)
+    assert np.array_equal(nl.indices, idx)
+    # a keep-everything filter reproduces the unfiltered list
+    allk = build_neighbor_list(x, radius, np.zeros(dim), np.full(dim, L), period,
+                               kind=kind, keep=[15] * 4)
+    assert np.array_equal(allk.offsets, full.offsets)
+    assert np.array_equal(allk.indices, full.indices)

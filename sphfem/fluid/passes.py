@@ -86,6 +86,19 @@ def _F(d, R, fac2, kkind):
     return -fac2 * kernel_dfdq(q, kkind) / q
 
 
+def _view_keep():
+    keep = [0] * (max(FLUID, WALL) + 1)
+    keep[FLUID] = (1 << FLUID) | (1 << WALL)
+    keep[WALL] = 1 << FLUID
+    return tuple(keep)
+
+
+#: the fluid's view as a pair filter of :func:`sphfem.neighbors.build_neighbor_list`
+#: (``keep``: bit masks of the kept neighbour kinds by row kind): the same rows as
+#: :func:`filter_rows`, built in the search itself without a second pass over the list
+VIEW_KEEP = _view_keep()
+
+
 @njit(cache=True, parallel=True)
 def filter_rows(offsets, indices, kind):
     """The fluid's view of a neighbour list (CSR), from the kind array alone.

@@ -302,7 +302,8 @@ class FluidSolver:
     radius ``R`` [m], domain box ``lo``/``hi`` and ``period`` (0 on open axes), ``params``.
 
     Neighbours: stand-alone (``sim=None``) the solver keeps its own Verlet list (radius
-    R (1 + skin), cell sort every ``sort_every`` rebuilds).  Driven by a
+    R (1 + skin), cell sort every ``sort_every`` rebuilds), built directly as the filtered
+    view (pair filter of the search).  Driven by a
     :class:`~sphfem.simulation.Simulation` (``sim`` given) it uses the driver's shared list
     ``sim.nbrs``: after its half drift it calls ``sim.ensure_neighbors()`` and, whenever
     ``sim.nbrs_version`` changed, derives its filtered view (:func:`passes.filter_rows`).
@@ -420,8 +421,10 @@ class FluidSolver:
             perm = cell_sort_permutation(x, self.list_radius, self.lo, self.hi, self.period)
             self.p.reorder(perm)
             self.reorder(perm)
-        self._set_view(build_neighbor_list(self.p.x, self.list_radius, self.lo, self.hi,
-                                           self.period))
+        # the fluid's view directly (pair filter in the search: no filter_rows pass)
+        self._set_filtered(build_neighbor_list(self.p.x, self.list_radius, self.lo, self.hi,
+                                               self.period, kind=self.p.kind,
+                                               keep=passes.VIEW_KEEP))
         self._xref = self.p.x.copy()
         self.wall["neighbors"] += time.perf_counter() - t0
 
