@@ -141,7 +141,17 @@ class HeatSystem:
         [-2/dt, 0].  A includes the ghost rules (an antisymmetric ghost adds -r g to its
         source's column).  Interior rows give 1 / (sum_j g_ij / (rho c)_i), i.e.
         dt = C rho c dx^2 / k on a lattice; ``diagnostics`` reports C.
+
+        The conductances of a system never change, so the bound is computed once and cached
+        (the driver asks for it every step).
         """
+        cached = self.__dict__.get("_stable_dt")
+        if cached is not None:
+            return cached
+        self._stable_dt = self._gershgorin_dt()
+        return self._stable_dt
+
+    def _gershgorin_dt(self) -> float:
         if self.active_index.size == 0:
             return np.inf
         A, _ = self.matrix()
