@@ -14,7 +14,10 @@ simulation does every few steps), and times, after a warm-up call that compiles:
 * ``build_cpu_s``, ``density_cpu_s``: minimum process CPU seconds (all threads), to judge
   contention on a shared machine.
 
-Run ``python -m sphfem.bench neighbors [--json FILE] [--quick]`` or ``sphfem bench NAME``.
+Full fluid steps: ``dambreak2d``, ``droplet3d`` (and ``dambreak3d``) dispatch to
+:mod:`sphfem.fluid.bench` (particle-steps/s and pairs/s on 1 and 2 threads).
+
+Run ``python -m sphfem.bench NAME [--json FILE] [--quick]`` or ``sphfem bench NAME``.
 """
 
 from __future__ import annotations
@@ -35,6 +38,10 @@ from sphfem.kernels import WENDLAND_C2, kernel_sigma
 from sphfem.neighbors import build_neighbor_list, cell_sort_permutation
 
 BENCHES = ("neighbors", "density")
+#: full fluid steps (:mod:`sphfem.fluid.bench`): particle-steps/s and pairs/s
+FLUID_BENCHES = ("dambreak2d", "droplet3d", "dambreak3d")
+#: every name ``run_bench`` / ``sphfem bench NAME`` accepts
+BENCHMARKS = BENCHES + FLUID_BENCHES
 QUICK_SIZES = (20_000,)
 
 
@@ -189,14 +196,22 @@ def run_bench(
     cells_per_radius: int = 1,
     verbose: bool = True,
 ) -> dict:
-    """Run benchmark ``name`` ("neighbors" or "density"); returns a JSON-serialisable dict.
+    """Run benchmark ``name`` (:data:`BENCHMARKS`); returns a JSON-serialisable dict.
 
-    Both names time the same cases (neighbour build and density pass, since the density
-    pass needs the list); ``name`` selects which figures are printed first.  ``quick``
-    uses ~2e4 particles and 2 repeats (for tests).
+    "neighbors" and "density" time the same cases (neighbour build and density pass, since
+    the density pass needs the list); ``name`` selects which figures are printed first.
+    "dambreak2d", "droplet3d" and "dambreak3d" time full fluid steps
+    (:func:`sphfem.fluid.bench.run_fluid_bench`: particle-steps/s and pairs/s on each
+    thread count; ``sizes`` there are fluid particle counts, the case's own by default).
+    ``quick`` uses ~2e4 particles and 2 repeats (for tests).
     """
+    if name in FLUID_BENCHES:
+        from sphfem.fluid.bench import run_fluid_bench
+
+        fs = None if quick or sizes == (100_000, 1_000_000) else sizes
+        return run_fluid_bench(quick, name, sizes=fs, threads=threads, verbose=verbose)
     if name not in BENCHES:
-        raise ValueError(f"unknown benchmark {name!r}; expected one of {BENCHES}")
+        raise ValueError(f"unknown benchmark {name!r}; expected one of {BENCHMARKS}")
     if quick:
         sizes = QUICK_SIZES
     if repeats is None:
@@ -252,7 +267,7 @@ def format_table(result: dict) -> str:
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(prog="python -m sphfem.bench", description=__doc__.split("\n")[0])
-    p.add_argument("name", choices=BENCHES)
+    p.add_argument("name", choices=BENCHMARKS)
     p.add_argument("--json", metavar="FILE", help="write the results as JSON")
     p.add_argument("--quick", action="store_true", help="small sizes (~2e4 particles)")
     p.add_argument("--sizes", type=int, nargs="+", default=[100_000, 1_000_000])
@@ -262,7 +277,7 @@ def main(argv=None) -> int:
     a = p.parse_args(argv)
     res = run_bench(
         a.name,
-        sizes=tuple(a.sizes),
+        sizes=tuple(a.sizes),  # fluid cases: fluid particle counts (default: the case's)
         threads=tuple(a.threads),
         quick=a.quick,
         repeats=a.repeats,
