@@ -428,6 +428,11 @@ def import_for(name: str) -> None:
         return
     if name in targets and name not in MODULES:
         importlib.import_module(targets[name].split(":")[0])
+    if name not in MODULES and name not in SECTIONS:
+        # a package may register modules under other names (sphfem.solid -> "tlsph"):
+        # import every physics package (their imports are cheap: no numba compilation)
+        for pkg in physics_packages():
+            importlib.import_module(pkg)
 
 
 def all_sections() -> dict[str, Section]:
