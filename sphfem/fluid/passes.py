@@ -99,44 +99,58 @@ def _view_keep():
 VIEW_KEEP = _view_keep()
 
 
-@njit(cache=True, parallel=True)
-def filter_rows(offsets, indices, kind):
+def filter_rows(offsets, indices, kind, buf=None):
     """The fluid's view of a neighbour list (CSR), from the kind array alone.
 
     Fluid rows keep their FLUID and WALL neighbours, wall rows only their FLUID neighbours
     (deep walls get empty rows), rows of other kinds (SOLID, GHOST) are emptied: wall-wall
     pairs and pairs with kinds the fluid does not interact with then cost nothing in the
-    passes.  Built once per neighbour-list build and reused until the next one.
+    passes.  Built once per neighbour-list build and reused until the next one.  One pass
+    over the list (kept entries go to the rows' own slots of ``buf``, a work buffer of at
+    least ``indices``' length), then a copy of the kept entries.
     """
+    if buf is None or buf.shape[0] < indices.shape[0]:
+        buf = np.empty_like(indices)
+    counts = np.empty(offsets.shape[0] - 1, dtype=np.int64)
+    _filter_own_slots(offsets, indices, kind, buf, counts)
+    new_off = np.zeros(offsets.shape[0], dtype=np.int64)
+    np.cumsum(counts, out=new_off[1:])
+    out = np.empty(new_off[-1], dtype=indices.dtype)
+    _gather_rows(offsets, new_off, buf, out)
+    return new_off, out
+
+
+@njit(cache=True, parallel=True)
+def _filter_own_slots(offsets, indices, kind, buf, counts):
+    """Kept neighbours of row i into ``buf[offsets[i] : offsets[i] + counts[i]]``
+    (branch-free: every entry is stored, the slot advances only when it is kept)."""
     n = offsets.shape[0] - 1
-    counts = np.empty(n, dtype=np.int64)
     for i in prange(n):
         ki = kind[i]
+        o = offsets[i]
         c = 0
         if ki == FLUID:
-            for jj in range(offsets[i], offsets[i + 1]):
-                kj = kind[indices[jj]]
-                c += kj == FLUID or kj == WALL
+            for jj in range(o, offsets[i + 1]):
+                j = indices[jj]
+                kj = kind[j]
+                buf[o + c] = j
+                c += (kj == FLUID) | (kj == WALL)
         elif ki == WALL:
-            for jj in range(offsets[i], offsets[i + 1]):
-                c += kind[indices[jj]] == FLUID
+            for jj in range(o, offsets[i + 1]):
+                j = indices[jj]
+                buf[o + c] = j
+                c += kind[j] == FLUID
         counts[i] = c
-    new_off = np.zeros(n + 1, dtype=np.int64)
-    for i in range(n):
-        new_off[i + 1] = new_off[i] + counts[i]
-    out = np.empty(new_off[n], dtype=indices.dtype)
+
+
+@njit(cache=True, parallel=True)
+def _gather_rows(offsets, new_off, buf, out):
+    n = offsets.shape[0] - 1
     for i in prange(n):
-        ki = kind[i]
-        if ki != FLUID and ki != WALL:
-            continue
+        o = offsets[i]
         k = new_off[i]
-        for jj in range(offsets[i], offsets[i + 1]):
-            j = indices[jj]
-            kj = kind[j]
-            if kj == FLUID or (ki == FLUID and kj == WALL):
-                out[k] = j
-                k += 1
-    return new_off, out
+        for q in range(new_off[i + 1] - k):
+            out[k + q] = buf[o + q]
 
 
 @njit(cache=True, inline="always")

@@ -391,7 +391,10 @@ class FluidSolver:
 
     def _set_view(self, nl: NeighborList) -> None:
         """Filtered view of ``nl`` for the passes; (re)size the scratch arrays."""
-        off, idx = passes.filter_rows(nl.offsets, nl.indices, self.p.kind)
+        m = nl.indices.shape[0]  # the work buffer: the compacted rows' (free until evaluate)
+        if self._nb_buf is None or self._nb_buf.shape[0] < m:
+            self._nb_buf = np.empty(m + m // 4, dtype=nl.indices.dtype)
+        off, idx = passes.filter_rows(nl.offsets, nl.indices, self.p.kind, self._nb_buf)
         self._set_filtered(NeighborList(off, idx, nl.radius, nl.period))
 
     def _set_filtered(self, nl: NeighborList) -> None:
