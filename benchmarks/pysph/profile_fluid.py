@@ -57,6 +57,10 @@ def kernels_of(s, nl=None):
     g = s.gravity
     dt = s.stable_dt()[0] * 1e-6  # tiny: repeated calls leave the state unchanged
     delta_coef = pa.delta * s.h * pa.c0
+    # the compacted in-range rows (density_gradient emits them; fluid_forces reads them)
+    nb = np.empty_like(nl.indices)
+    cnt = np.zeros(p.n, dtype=np.int64)
+    passes.compact_rows(p.x, p.kind, nl.offsets, nl.indices, s.R, s.period, nb, cnt)
     ks = {
         "stable_dt": lambda: W._fluid_maxima(p.v, p.acc, p.rho, p.mu, p.kind),
         "predict": lambda: W._predict(p.x, p.v, p.rho, p.acc, p.drho, p.kind, dt, sc.v_n,
@@ -71,11 +75,11 @@ def kernels_of(s, nl=None):
                                                   sc.V, sc.meff, sc.isf),
         "density_gradient": lambda: passes.density_gradient(
             p.x, p.rho, sc.V, p.kind, nl.offsets, nl.indices, s.R, s.sigma, s.kkind,
-            s.period, pa.cond_max, sc.grad, sc.ok),
+            s.period, pa.cond_max, sc.grad, sc.ok, nb, cnt),
         "pack_rows": lambda: passes.pack_rows(p.x, p.v, sc.vg, p.rho, sc.pr, sc.V, sc.meff,
                                               sc.isf, p.mu, sc.grad, sc.P),
         "fluid_forces": lambda: passes.fluid_forces(
-            sc.P, p.kind, nl.offsets, nl.indices, s.R, s.sigma, s.kkind, s.period, g,
+            sc.P, p.kind, nl.offsets, cnt, nb, s.R, s.sigma, s.kkind, s.period, g,
             pa.eps_visc * s.h * s.h, delta_coef, pa.alpha * s.h * pa.c0, p.acc, p.drho,
             p.f_fluid),
         "correct": lambda: W._correct(p.x, p.v, p.rho, p.acc, p.drho, p.kind, dt, sc.v_n,

@@ -1,6 +1,10 @@
 #!/usr/bin/env python
 """Prototype of PROFILE.md's recommendation 1, measured without touching sphfem/.
 
+Superseded: recommendation 1 is implemented in ``sphfem.fluid.passes`` (density_gradient
+emits the rows, fluid_forces takes ``cnt``); the source rewrites below no longer match
+and the script stops with its "passes.py changed" message.  Kept for the record.
+
 Variants of the current ``passes.density_gradient`` and ``passes.fluid_forces`` are
 generated from their source (``inspect``) with two small rewrites:
 
