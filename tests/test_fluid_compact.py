@@ -49,3 +49,21 @@ def test_compacted_rows_give_identical_forces(dim, delta, alpha):
     cnt = s._scratch.cnt
     assert cnt.sum() < s.nbrs.n_pairs
     assert np.all(cnt <= np.diff(s.nbrs.offsets))
+
+
+def test_driven_fluid_leaves_the_shared_list_alone():
+    """Driven by a Simulation (fluid + heat on the shared list), the fluid's compaction and
+    filter write only fluid-owned buffers: sim.nbrs is unchanged by a step."""
+    from test_fluid_module import _scene
+
+    from sphfem.simulation import Simulation
+
+    sim = Simulation(_scene(skin=0.5))
+    sim.step(1.0e-5)
+    nl = sim.nbrs
+    off, idx, version = nl.offsets.copy(), nl.indices.copy(), sim.nbrs_version
+    sim.step(1.0e-5)
+    assert sim.nbrs_version == version  # no rebuild in between
+    assert np.array_equal(sim.nbrs.offsets, off) and np.array_equal(sim.nbrs.indices, idx)
+    fl = sim.modules[0].solver
+    assert not np.shares_memory(fl._nb, sim.nbrs.indices)
