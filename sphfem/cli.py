@@ -44,8 +44,9 @@ def _parser() -> argparse.ArgumentParser:
     v.add_argument("--plot", metavar="FILE", help="write an error-versus-wall-time PNG")
 
     b = sub.add_parser("bench", help="throughput benchmarks",
-                       description="Neighbour search and summation-density throughput.")
-    b.add_argument("name", help="benchmark name: neighbors | density")
+                       description="Throughput: neighbour search, summation density, fluid steps.")
+    b.add_argument("name",
+                   help="benchmark: neighbors | density | dambreak2d | dambreak3d | droplet3d")
     b.add_argument("--json", metavar="FILE", help="write the figures as JSON")
     b.add_argument("--quick", action="store_true", help="small sizes (for smoke tests)")
 

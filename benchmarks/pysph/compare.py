@@ -216,7 +216,7 @@ def main(argv=None):
     ap.add_argument("--out", default=HERE)
     a = ap.parse_args(argv)
 
-    started = datetime.datetime.now(datetime.timezone.utc).isoformat(timespec="seconds")
+    started = datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")
     la0 = run_pysph.loadavg()
     results = {"date": started, "loadavg_start": la0, "machine": machine(),
                "git_head": git_head(), "pysph_versions": run_pysph.pysph_version(
@@ -267,7 +267,7 @@ def main(argv=None):
     numba.set_num_threads(numba.config.NUMBA_NUM_THREADS)
 
     rows = []
-    for name, case, dx, alpha in CASES:
+    for name, _case, _dx, _alpha in CASES:
         for t in a.threads:
             p = best.get((name, t, "pysph"))
             if p is None:

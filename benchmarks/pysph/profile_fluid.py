@@ -191,7 +191,8 @@ def list_radius_experiment(s, threads, repeats):
                                                 "fluid_forces")}
         t["entries"] = int(idx.shape[0])
         if name == "1.15R":
-            t["compact_to_R"] = tmin(lambda: compact_to_R(p.x, off, idx, s.R), repeats)
+            t["compact_to_R"] = tmin(lambda p=p, off=off, idx=idx: compact_to_R(p.x, off, idx, s.R),
+                                     repeats)
         t.update(row_entries(s, nl))
         res[name] = t
     return res

@@ -168,7 +168,8 @@ def worker(a) -> dict:
     return {
         "code": "pysph", "case": case, "dx": a.dx, "threads": a.threads,
         "openmp": a.openmp, "n_fluid": nf, "n_total": n_total, "n_by_array": n_by,
-        "kernel": f"{type(kernel).__name__}(dim={kernel.dim})", "support_R": R, "h": float(hs.max()),
+        "kernel": f"{type(kernel).__name__}(dim={kernel.dim})", "support_R": R,
+        "h": float(hs.max()),
         "h_uniform": bool(np.ptp(hs) < 1e-12 * hs.max()),
         "integrator": integ, "evals_per_step": evals,
         "nnps": type(app.nnps).__name__ if getattr(app, "nnps", None) else None,

@@ -37,7 +37,7 @@ def main(paths):
             per[key].append((k, r))
     out = ["# sphfem vs PySPH: summary over runs\n",
            "Runs (date, load average at start -> end):\n"]
-    for p, res in zip(paths, runs):
+    for p, res in zip(paths, runs, strict=True):
         out.append(f"* `{p}`: {res['date']}, load {res['loadavg_start']} -> "
                    f"{res['loadavg_end']}, git `{res['git_head'][:12]}`")
     out.append("\nRatio = ours / PySPH particle-steps/s (ours with the neighbour rebuild "
