@@ -98,11 +98,19 @@ def _cmd_run(args) -> int:
         scene = load_scene(args.scene)
     except SceneError as e:
         raise UsageError(str(e)) from None
+    opts = dict(overwrite=args.overwrite, resume=args.resume)
     try:
-        out = prepare_output_dir(args.out, overwrite=args.overwrite, resume=args.resume)
+        prepare_output_dir(args.out, check_only=True, **opts)
     except OutputExistsError as e:
         raise UsageError(str(e)) from None
-    sim = Simulation(scene, source=args.scene)
+    try:  # set-up problems (meshes, probes, overlapping bodies) stop before any output
+        sim = Simulation(scene, source=args.scene)
+    except SceneError as e:  # e.g. overlapping blocks, found while building particles
+        raise UsageError(str(e)) from None
+    except (ValueError, KeyError, FileNotFoundError) as e:
+        msg = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
+        raise UsageError(f"{args.scene}: set-up failed: {msg}") from None
+    out = prepare_output_dir(args.out, **opts)
     try:
         summary = sim.run(out, progress=not args.no_progress, resume=args.resume)
     except SimulationStopped as e:

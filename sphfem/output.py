@@ -61,10 +61,12 @@ def _plain(o):
     return o
 
 
-def prepare_output_dir(path, overwrite: bool = False, resume: bool = False) -> Path:
+def prepare_output_dir(path, overwrite: bool = False, resume: bool = False,
+                       check_only: bool = False) -> Path:
     """Create the output folder; refuse an existing non-empty one unless told otherwise.
 
     ``overwrite`` deletes the old contents; ``resume`` keeps them (for a checkpoint restart).
+    ``check_only`` raises the same errors but neither deletes nor creates anything.
     """
     path = Path(path)
     if path.exists() and not path.is_dir():
@@ -76,7 +78,11 @@ def prepare_output_dir(path, overwrite: bool = False, resume: bool = False) -> P
             raise OutputExistsError(
                 f"{path}: output folder exists and is not empty; pass --overwrite to replace it"
             )
+        if check_only:
+            return path
         shutil.rmtree(path)
+    if check_only:
+        return path
     path.mkdir(parents=True, exist_ok=True)
     return path
 

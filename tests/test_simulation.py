@@ -133,3 +133,23 @@ def test_cli_refuses_existing_output(tmp_path, capsys):
     assert (out / "keep.txt").read_text() == "precious"
     assert main(["run", str(good), "--out", str(out), "--no-progress", "--overwrite"]) == 0
     assert (out / "summary.json").exists() and not (out / "keep.txt").exists()
+
+
+def test_cli_setup_error_before_any_output(tmp_path, capsys):
+    """Overlapping blocks are found while building particles: one line, exit 2, no folder."""
+    scene = SCENE.format(modules='["heat"]') + """
+[[blocks]]
+name = "overlap"
+shape = "box"
+kind = "solid"
+material = "m"
+lo = [0.2, 0.2]
+hi = [0.4, 0.4]
+"""
+    f = tmp_path / "overlap.toml"
+    f.write_text(scene)
+    out = tmp_path / "out"
+    assert main(["run", str(f), "--out", str(out), "--no-progress"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "overlap" in err[0]
+    assert not out.exists()
