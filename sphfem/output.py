@@ -87,16 +87,51 @@ def prepare_output_dir(path, overwrite: bool = False, resume: bool = False,
     return path
 
 
-class ParticleSeries:
-    """A VTU file per output time plus a ParaView ``.pvd`` collection (written through meshio).
+class VTUSeries:
+    """A VTU file per output time plus a ParaView ``.pvd`` collection listing them by time.
 
-    Particles are written as VTK vertex cells with their fields as point data.
+    :meth:`write_mesh` writes a meshio mesh to a temporary name, renames it, and rewrites
+    the ``.pvd`` atomically; subclasses build the mesh of what they store.
     """
 
-    def __init__(self, folder, name: str = "particles"):
+    def __init__(self, folder, name: str):
         self.folder = Path(folder)
         self.name = name
         self.entries: list[tuple[float, str]] = []
+
+    def write_mesh(self, t: float, mesh) -> Path:
+        import meshio
+
+        self.folder.mkdir(parents=True, exist_ok=True)
+        fname = f"{self.name}_{len(self.entries):05d}.vtu"
+        tmp = self.folder / f".{fname}.tmp.vtu"
+        try:
+            meshio.write(tmp, mesh, file_format="vtu")
+            os.replace(tmp, self.folder / fname)
+        finally:
+            if tmp.exists():
+                tmp.unlink()
+        self.entries.append((float(t), fname))
+        self._write_pvd()
+        return self.folder / fname
+
+    def _write_pvd(self) -> None:
+        rows = "\n".join(
+            f'    <DataSet timestep="{t:.9g}" group="" part="0" file="{f}"/>'
+            for t, f in self.entries
+        )
+        text = (
+            '<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n'
+            f"  <Collection>\n{rows}\n  </Collection>\n</VTKFile>\n"
+        )
+        atomic_write_text(self.folder / f"{self.name}.pvd", text)
+
+
+class ParticleSeries(VTUSeries):
+    """Particles as VTK vertex cells with their fields as point data (through meshio)."""
+
+    def __init__(self, folder, name: str = "particles"):
+        super().__init__(folder, name)
 
     def write(self, t: float, particles, fields=None) -> Path:
         import meshio
@@ -118,21 +153,4 @@ class ParticleSeries:
                 a = a.reshape(n, -1)
             data[k] = a.astype(np.float64) if a.dtype.kind in "biu" else a
         mesh = meshio.Mesh(pts, [("vertex", np.arange(n).reshape(-1, 1))], point_data=data)
-        fname = f"{self.name}_{len(self.entries):05d}.vtu"
-        tmp = self.folder / f".{fname}.tmp.vtu"
-        meshio.write(tmp, mesh, file_format="vtu")
-        os.replace(tmp, self.folder / fname)
-        self.entries.append((float(t), fname))
-        self._write_pvd()
-        return self.folder / fname
-
-    def _write_pvd(self) -> None:
-        rows = "\n".join(
-            f'    <DataSet timestep="{t:.9g}" group="" part="0" file="{f}"/>'
-            for t, f in self.entries
-        )
-        text = (
-            '<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n'
-            f"  <Collection>\n{rows}\n  </Collection>\n</VTKFile>\n"
-        )
-        atomic_write_text(self.folder / f"{self.name}.pvd", text)
+        return self.write_mesh(t, mesh)

@@ -2,15 +2,12 @@
 
 from __future__ import annotations
 
-import os
-from pathlib import Path
-
 import numpy as np
 
-from sphfem.output import atomic_write_text
+from sphfem.output import VTUSeries
 
 
-class FEMSeries:
+class FEMSeries(VTUSeries):
     """One VTU per call of :meth:`write` plus ``<name>.pvd`` listing them by time.
 
     Point data (at mesh vertices): ``displacement`` (3 components, zero-padded in 2D),
@@ -20,13 +17,10 @@ class FEMSeries:
     """
 
     def __init__(self, folder, name: str = "substrate"):
-        self.folder = Path(folder)
+        super().__init__(folder, name)
         self.folder.mkdir(parents=True, exist_ok=True)
-        self.name = name
-        self.entries: list[tuple[float, str]] = []
 
-    def write(self, t: float, result) -> Path:
-        import meshio
+    def write(self, t: float, result):
         from skfem.io.meshio import to_meshio
 
         mesh = result.substrate.mesh
@@ -44,25 +38,4 @@ class FEMSeries:
             m.points = np.column_stack([m.points, np.zeros(len(m.points))])
         m.cell_data = {"stress_elem": [result.stress_elem.reshape(-1, 9)],
                        "von_mises_elem": [result.von_mises_elem]}
-        fname = f"{self.name}_{len(self.entries):05d}.vtu"
-        tmp = self.folder / f".{fname}.tmp.vtu"
-        try:
-            meshio.write(tmp, m, file_format="vtu")
-            os.replace(tmp, self.folder / fname)
-        finally:
-            if tmp.exists():
-                tmp.unlink()
-        self.entries.append((float(t), fname))
-        self._write_pvd()
-        return self.folder / fname
-
-    def _write_pvd(self) -> None:
-        rows = "\n".join(
-            f'    <DataSet timestep="{t:.9g}" group="" part="0" file="{f}"/>'
-            for t, f in self.entries
-        )
-        text = (
-            '<?xml version="1.0"?>\n<VTKFile type="Collection" version="0.1">\n'
-            f"  <Collection>\n{rows}\n  </Collection>\n</VTKFile>\n"
-        )
-        atomic_write_text(self.folder / f"{self.name}.pvd", text)
+        return self.write_mesh(t, m)
