@@ -37,11 +37,14 @@ def _parser() -> argparse.ArgumentParser:
 
     v = sub.add_parser("validate", help="run a named validation case",
                        description="Run a validation case at several resolutions and variants.")
-    v.add_argument("case", nargs="?", help="case name (see --list)")
+    v.add_argument("case", nargs="?", help="case name (see --list), or 'all' with --out")
     v.add_argument("--list", action="store_true", help="list the available cases")
     v.add_argument("--quick", action="store_true", help="fewer / coarser resolutions")
     v.add_argument("--json", metavar="FILE", help="write the results as JSON")
     v.add_argument("--plot", metavar="FILE", help="write an error-versus-wall-time PNG")
+    v.add_argument("--out", metavar="DIR",
+                   help="with 'all': folder for report.md and each case's JSON and PNG")
+    v.add_argument("--overwrite", action="store_true", help="replace an existing --out folder")
 
     b = sub.add_parser("bench", help="throughput benchmarks",
                        description="Throughput: neighbour search, summation density, fluid steps.")
@@ -66,6 +69,8 @@ def _cmd_validate(args) -> int:
         return EXIT_OK
     if not args.case:
         raise UsageError("validate: give a case name or --list")
+    if args.case == "all":
+        return _validate_all(args)
     if args.case not in cases:
         raise UsageError(f"validate: unknown case {args.case!r}; known: {', '.join(sorted(cases))}")
     result = cases[args.case](args.quick)
@@ -75,6 +80,24 @@ def _cmd_validate(args) -> int:
     if args.plot:
         work_precision_plot(result, args.plot)
     return EXIT_OK if result.passed else EXIT_FAIL
+
+
+def _validate_all(args) -> int:
+    from pathlib import Path
+
+    from sphfem.output import OutputExistsError, prepare_output_dir
+    from sphfem.validation.report import run_all
+
+    if not args.out:
+        raise UsageError("validate all: give --out DIR for the report")
+    try:
+        out = prepare_output_dir(args.out, overwrite=args.overwrite)
+    except OutputExistsError as e:
+        raise UsageError(str(e)) from None
+    ok, summary = run_all(Path(out), args.quick)
+    print("\n".join(summary))
+    print(f"report: {Path(out) / 'report.md'}")
+    return EXIT_OK if ok else EXIT_FAIL
 
 
 def _cmd_bench(args) -> int:
