@@ -45,6 +45,8 @@ def _parser() -> argparse.ArgumentParser:
     v.add_argument("--out", metavar="DIR",
                    help="with 'all': folder for report.md and each case's JSON and PNG")
     v.add_argument("--overwrite", action="store_true", help="replace an existing --out folder")
+    v.add_argument("--update-readme", metavar="README",
+                   help="with 'all': write the verdict table into README's marked block")
 
     b = sub.add_parser("bench", help="throughput benchmarks",
                        description="Throughput: neighbour search, summation density, fluid steps.")
@@ -86,7 +88,7 @@ def _validate_all(args) -> int:
     from pathlib import Path
 
     from sphfem.output import OutputExistsError, prepare_output_dir
-    from sphfem.validation.report import run_all
+    from sphfem.validation.report import run_all, update_readme
 
     if not args.out:
         raise UsageError("validate all: give --out DIR for the report")
@@ -95,6 +97,8 @@ def _validate_all(args) -> int:
     except OutputExistsError as e:
         raise UsageError(str(e)) from None
     ok, summary = run_all(Path(out), args.quick)
+    if args.update_readme:
+        update_readme(Path(args.update_readme), summary, args.quick)
     print("\n".join(summary))
     print(f"report: {Path(out) / 'report.md'}")
     return EXIT_OK if ok else EXIT_FAIL

@@ -34,3 +34,14 @@ def test_validate_all_report(tmp_path, monkeypatch, capsys):
 def test_validate_all_needs_out(capsys):
     assert main(["validate", "all"]) == 2
     assert "--out" in capsys.readouterr().err
+
+
+def test_update_readme_replaces_marked_block(tmp_path, monkeypatch):
+    readme = tmp_path / "README.md"
+    readme.write_text(f"intro\n{rep.README_BEGIN}\nold table\n{rep.README_END}\nrest\n")
+    monkeypatch.setattr(rep, "load_cases", lambda: {"good": _good})
+    assert main(["validate", "all", "--out", str(tmp_path / "r"),
+                 "--update-readme", str(readme)]) == 0
+    text = readme.read_text()
+    assert "old table" not in text and "| good | passed |" in text
+    assert text.startswith("intro\n") and text.endswith("rest\n")
