@@ -225,3 +225,13 @@ def test_bad_parameters():
     s = FEMSubstrate(mesh, E, NU, ALPHA, clamps=["bottom"])
     with pytest.raises(ValueError, match="dT"):
         s.solve(dT_nodal=np.ones(7))
+
+
+def test_corrupt_mesh_file_is_a_clear_error(tmp_path):
+    """meshio exits the process on an unreadable .msh; we turn that into a ValueError."""
+    from sphfem.fem.substrate import FEMSubstrate
+
+    bad = tmp_path / "corrupt.msh"
+    bad.write_text("this is not a mesh\n")
+    with pytest.raises(ValueError, match="could not be read"):
+        FEMSubstrate(bad, E=300e9, nu=0.21, alpha=8.1e-6)

@@ -115,14 +115,23 @@ def load_mesh(path) -> Mesh:
 
 
 def read_quiet(path):
-    """meshio.read without the blank line meshio's gmsh reader prints to stdout."""
+    """meshio.read without the blank line meshio's gmsh reader prints to stdout.
+
+    A file meshio cannot parse raises ``ValueError`` naming the file (meshio itself prints
+    to stderr and calls ``sys.exit(1)`` on an unreadable file of an ambiguous suffix).
+    """
     import contextlib
     import io
 
     import meshio
 
-    with contextlib.redirect_stdout(io.StringIO()):
-        return meshio.read(path)
+    out, err = io.StringIO(), io.StringIO()
+    try:
+        with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err):
+            return meshio.read(path)
+    except (SystemExit, meshio.ReadError, KeyError, IndexError, ValueError) as e:
+        said = " ".join((err.getvalue() + " " + str(e)).split()) or type(e).__name__
+        raise ValueError(f"mesh file {path} could not be read ({said})") from None
 
 
 def _component_indices(spec, dim: int) -> list[int]:
