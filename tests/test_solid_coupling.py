@@ -4,64 +4,15 @@ a hot water block on an alumina block (2D), heat only."""
 from __future__ import annotations
 
 import numpy as np
+from test_coupling import HOT  # the same hot-block scene, with the FEM backend
 
-SCENE = """
-[scene]
-name = "hot_block_tlsph"
-dim = 2
-
-[domain]
-lo = [-0.6e-3, -0.3e-3]
-hi = [0.6e-3, 0.3e-3]
-
-[sph]
-dx = 25e-6
-
-[materials.water]
-rho0 = 1000.0
-c = 4000.0
-k = 0.6
-
-[materials.alumina]
-rho0 = 3950.0
-c = 900.0
-k = 10.0
-E = 300e9
-nu = 0.21
-alpha = 8.1e-6
-
-[[blocks]]
-name = "substrate"
-shape = "box"
-kind = "solid"
-material = "alumina"
-lo = [-0.5e-3, -0.25e-3]
-hi = [0.5e-3, 0.0]
-temperature = "20 C"
-
-[[blocks]]
-name = "hot"
-shape = "box"
-kind = "fluid"
-material = "water"
-lo = [-0.2e-3, 0.0]
-hi = [0.2e-3, 0.1e-3]
-temperature = "100 C"
-
-[physics]
-modules = ["heat", "coupling"]
-
-[coupling]
-backend = "tlsph"
-material = "alumina"
-clamps = ["left", "right"]
-every_k_steps = 3
-vtu_every = 2
-probes = [[0.0, -12.5e-6], [0.0, -0.1e-3]]
-
-[time]
-t_end = 6e-4
-"""
+# the FEM scene with the TL-SPH backend: no mesh section, probes inside the TL-SPH body
+SCENE = (
+    HOT.replace('name = "hot_block"', 'name = "hot_block_tlsph"')
+    .replace('[coupling]\nmaterial', '[coupling]\nbackend = "tlsph"\nmaterial')
+    .replace('[coupling.mesh]\nh_fine = 25e-6\ncells = "tri"\n',
+             'probes = [[0.0, -12.5e-6], [0.0, -0.1e-3]]\n')
+)
 
 
 def test_coupled_run_with_the_tlsph_substrate(tmp_path, monkeypatch):
