@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import json
 import logging
+import os
 import sys
 
 EXIT_OK, EXIT_FAIL, EXIT_USAGE = 0, 1, 2
@@ -37,7 +38,11 @@ def _parser() -> argparse.ArgumentParser:
 
     v = sub.add_parser("validate", help="run a named validation case",
                        description="Run a validation case at several resolutions and variants.")
-    v.add_argument("case", nargs="?", help="case name (see --list), or 'all' with --out")
+    v.add_argument("case", nargs="?",
+                   help="case name (see --list), 'all' with --out, or 'stability' (the "
+                        "stiff/extreme-case matrix)")
+    v.add_argument("--only", metavar="ROWS",
+                   help="with 'stability': comma-separated row names to run")
     v.add_argument("--list", action="store_true", help="list the available cases")
     v.add_argument("--quick", action="store_true", help="fewer / coarser resolutions")
     v.add_argument("--json", metavar="FILE", help="write the results as JSON")
@@ -73,6 +78,8 @@ def _cmd_validate(args) -> int:
         raise UsageError("validate: give a case name or --list")
     if args.case == "all":
         return _validate_all(args)
+    if args.case == "stability":
+        return _validate_stability(args)
     if args.case not in cases:
         raise UsageError(f"validate: unknown case {args.case!r}; known: {', '.join(sorted(cases))}")
     result = cases[args.case](args.quick)
@@ -104,6 +111,41 @@ def _validate_all(args) -> int:
     return EXIT_OK if ok else EXIT_FAIL
 
 
+def _validate_stability(args) -> int:
+    from pathlib import Path
+
+    from sphfem.output import OutputExistsError, atomic_write_text, prepare_output_dir, write_json
+    from sphfem.validation import stability
+
+    names = [r.name for r in stability.ROWS]
+    rows = None
+    if args.only:
+        rows = [s.strip() for s in args.only.split(",") if s.strip()]
+        unknown = [r for r in rows if r not in names]
+        if unknown:
+            raise UsageError(f"validate stability: unknown row(s) {', '.join(unknown)}; "
+                             f"known: {', '.join(names)}")
+    out = None
+    if args.out:
+        try:
+            out = prepare_output_dir(args.out, overwrite=args.overwrite)
+        except OutputExistsError as e:
+            raise UsageError(str(e)) from None
+    results = stability.run_matrix(
+        args.quick, None if out is None else Path(out) / "runs", rows,
+        progress=lambda r: print(stability.text_line(r), flush=True))
+    report = stability.to_json(results, args.quick)
+    if out is not None:
+        atomic_write_text(Path(out) / "stability.md", stability.markdown(results, args.quick))
+        write_json(Path(out) / "stability.json", report)
+        print(f"report: {Path(out) / 'stability.md'}")
+    if args.json:
+        write_json(args.json, report)
+    bad = [r.name for r in results if not r.passed]
+    print("PASSED" if not bad else f"FAILED: {', '.join(bad)}")
+    return EXIT_OK if not bad else EXIT_FAIL
+
+
 def _cmd_bench(args) -> int:
     from sphfem.bench import BENCHMARKS, run_bench
     from sphfem.output import write_json
@@ -130,14 +172,25 @@ def _cmd_run(args) -> int:
         prepare_output_dir(args.out, check_only=True, **opts)
     except OutputExistsError as e:
         raise UsageError(str(e)) from None
+    if not os.path.exists(args.out):  # it can be created: the nearest existing ancestor
+        up = os.path.dirname(os.path.abspath(args.out))  # is a writable folder
+        while not os.path.exists(up):
+            up = os.path.dirname(up)
+        if not os.path.isdir(up) or not os.access(up, os.W_OK | os.X_OK):
+            why = "is not a folder" if not os.path.isdir(up) else "is not writable"
+            raise UsageError(f"{args.out}: cannot create the output folder: {up} {why}")
     try:  # set-up problems (meshes, probes, overlapping bodies) stop before any output
         sim = Simulation(scene, source=args.scene)
     except SceneError as e:  # e.g. overlapping blocks, found while building particles
         raise UsageError(str(e)) from None
-    except (ValueError, KeyError, FileNotFoundError) as e:
-        msg = str(e).strip().splitlines()[0] if str(e).strip() else type(e).__name__
+    except (ValueError, KeyError, OSError) as e:
+        msg = " ".join(str(e).split()) or type(e).__name__
         raise UsageError(f"{args.scene}: set-up failed: {msg}") from None
-    out = prepare_output_dir(args.out, **opts)
+    try:
+        out = prepare_output_dir(args.out, **opts)
+    except OSError as e:
+        raise UsageError(f"{args.out}: cannot create the output folder: "
+                         f"{e.strerror or e}") from None
     try:
         summary = sim.run(out, progress=not args.no_progress, resume=args.resume)
     except SimulationStopped as e:

@@ -301,8 +301,13 @@ def block_points(scene, i: int) -> np.ndarray:
     dx = b.dx if b.dx is not None else scene.sph.dx
     shape = Shape.from_block(b, scene.dim)
     if b.sampling == "poisson":
-        return poisson_points(shape, dx, scene.dim, seed=[scene.seed, i])
-    return lattice_points(shape, dx, scene.dim)
+        x = poisson_points(shape, dx, scene.dim, seed=[scene.seed, i])
+    else:
+        x = lattice_points(shape, dx, scene.dim)
+    if b.jitter:
+        rng = np.random.default_rng([scene.seed, i, 1])
+        x = x + rng.uniform(-b.jitter * dx, b.jitter * dx, size=x.shape)
+    return x
 
 
 def build_particles(scene) -> ParticleSet:
@@ -344,20 +349,46 @@ def build_particles(scene) -> ParticleSet:
 
 
 def _check_overlaps(scene, pts, spacing, boxes) -> None:
+    """Raise :class:`SceneError` if two blocks overlap, found as particles of one closer than
+    dx/2 (half the smaller spacing) to particles of the other or deeper than dx/2 inside the
+    other's shape (this catches lattices that happen to be staggered by exactly dx/2).  A
+    block whose particles all lie within the other's shape is reported as lying inside it
+    (key: the inner block), any other overlap with the later block as the key."""
+
+    def deep_inside(shape, x, depth):  # points more than ``depth`` inside ``shape``
+        if shape.as_box() is None and shape.radius <= depth:
+            return np.zeros(len(x), bool)
+        return shape.contains(x, tol=-depth)
+
+    shapes = [Shape.from_block(b, scene.dim) for b in scene.blocks]
     trees = {}
     for j in range(len(pts)):
         for i in range(j):
             tol = 0.5 * min(spacing[i], spacing[j])
             (lo_i, hi_i), (lo_j, hi_j) = boxes[i], boxes[j]
-            if np.any(lo_j > hi_i + tol) or np.any(lo_i > hi_j + tol):
+            (slo_i, shi_i), (slo_j, shi_j) = shapes[i].bounds(), shapes[j].bounds()
+            if ((np.any(lo_j > hi_i + tol) or np.any(lo_i > hi_j + tol)) and
+                    (np.any(np.greater_equal(slo_j, shi_i))
+                     or np.any(np.greater_equal(slo_i, shi_j)))):
                 continue
             if i not in trees:
                 trees[i] = cKDTree(pts[i])
             dist, _ = trees[i].query(pts[j], k=1, distance_upper_bound=tol)
-            close = int(np.count_nonzero(dist < tol))
+            close = int(np.count_nonzero((dist < tol) | deep_inside(shapes[i], pts[j], tol))
+                        + np.count_nonzero(deep_inside(shapes[j], pts[i], tol)))
             if close:
+                for inner, outer in ((j, i), (i, j)):
+                    b_in, b_out = scene.blocks[inner], scene.blocks[outer]
+                    if shapes[outer].contains(pts[inner], tol=1e-9 * tol).all():
+                        n = pts[inner].shape[0]
+                        raise SceneError(
+                            scene.source, f"blocks[{inner}]",
+                            f"block {b_in.name!r} lies inside block {b_out.name!r} "
+                            f"(blocks[{outer}]): all {n} of its particles are within it; "
+                            f"move it out of {b_out.name!r}")
                 bi, bj = scene.blocks[i], scene.blocks[j]
                 raise SceneError(
                     scene.source, f"blocks[{j}]",
                     f"block {bj.name!r} overlaps block {bi.name!r} (blocks[{i}]): {close} "
-                    f"particle(s) closer than dx/2 = {tol:g} m; move or shrink one of them")
+                    f"particle(s) closer than dx/2 = {tol:g} m to the other block or deeper "
+                    f"than that inside it; move or shrink one of them")

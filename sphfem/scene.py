@@ -168,6 +168,9 @@ BLOCKS = Section("blocks", (
     Param("temperature", TEMPERATURE, 293.15, unit="K", doc="initial temperature"),
     Param("dx", float, None, unit="m", positive=True, quantity="spacing",
           doc="particle spacing of this block (default: `[sph] dx`)"),
+    Param("jitter", float, 0.0, ge=0.0, lt=0.5,
+          doc="random disorder: each coordinate moves by a uniform amount in "
+              "[-jitter dx, jitter dx] (stream (seed, i, 1)); 0 keeps the sampling as is"),
 ), repeated=True, min_count=1, check=_check_block, doc=(
     "Bodies filled with particles, one `[[blocks]]` table each (at least one)."))
 
@@ -179,7 +182,10 @@ PHYSICS = Section("physics", (
 TIME = Section("time", (
     Param("t_end", float, REQUIRED, unit="s", positive=True, doc="end time"),
     Param("dt", float, None, unit="s", positive=True, quantity="time step",
-          doc="fixed time step (still capped by the stable limits)"),
+          doc="fixed time step (capped by the stable limits unless `cap_dt = false`)"),
+    Param("cap_dt", bool, True,
+          doc="cap a fixed `dt` at the modules' stable limits; `false` uses `dt` as given "
+              "(for stability studies: the guards then stop an unstable run)"),
     Param("cfl", float, 0.25, gt=0.0, le=1.0, doc="Courant number of the stable time step"),
     Param("max_steps", int, None, ge=1, doc="stop after this many steps"),
 ), doc="Time stepping.", required=True, check=_check_time)

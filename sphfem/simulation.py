@@ -73,6 +73,7 @@ class Simulation:
                 self.particles.add_field(name, ncomp, dtype)
         self.t = 0.0
         self.step_count = 0
+        self.steps_above_limit = 0
         self.nbrs = None
         self.nbrs_version = 0
         self.moving = any(m.moves_particles for m in self.modules)
@@ -136,12 +137,21 @@ class Simulation:
 
     # -- time stepping --------------------------------------------------------------------
     def stable_dt(self) -> tuple[float, str]:
-        """Smallest time-step limit over all modules and the scene's fixed dt, with its name."""
+        """The step to take and the name of what sets it.
+
+        The smallest time-step limit over all modules and the scene's fixed ``dt``; with
+        ``[time] cap_dt = false`` the fixed ``dt`` is taken as given, and each step above the
+        modules' smallest limit is counted in ``steps_above_stable_limit``.
+        """
         limits = {}
         for mod in self.modules:
             for k, v in mod.dt_limits(self).items():
                 limits[f"{mod.name}.{k}"] = v
         fixed = self.scene.time.dt
+        if fixed is not None and not self.scene.time.cap_dt:
+            if limits and fixed > min(limits.values()):
+                self.steps_above_limit += 1
+            return fixed, "time.dt"
         if fixed is not None:
             limits["time.dt"] = fixed
         if not limits:
@@ -221,8 +231,12 @@ class Simulation:
         finally:
             bar.close()
         wall = time.perf_counter() - wall0
-        if not series.entries or series.entries[-1][0] != self.t:
+        finite = not self.particles.check_finite()
+        if finite and (not series.entries or series.entries[-1][0] != self.t):
             series.write(self.t, self.particles, fields)
+        elif not finite:  # never write NaN/Inf: the last output is the last finite state
+            message += (f" (the non-finite state was not written; the last output is "
+                        f"t = {series.entries[-1][0]:.6g} s)")
         summary = self.summary(status, message, wall, dts, limiter_counts)
         write_json(out / "summary.json", summary)
         if status == "stopped":
@@ -255,7 +269,8 @@ class Simulation:
             "wall_s_per_module": dict(self.wall),
             "particle_steps_per_s": n * len(dts) / wall if wall > 0 else None,
             "dt": {"min": float(dts.min()), "max": float(dts.max()), "mean": float(dts.mean()),
-                   "controlling_limit_counts": limiter_counts},
+                   "controlling_limit_counts": limiter_counts,
+                   "steps_above_stable_limit": self.steps_above_limit},
             "neighbors": {"pairs": self.nbrs.n_pairs, "mean_per_particle": self.nbrs.n_pairs / n
                           if n else 0.0},
             "diagnostics": {m.name: m.diagnostics(self) for m in self.modules},

@@ -235,3 +235,19 @@ def test_corrupt_mesh_file_is_a_clear_error(tmp_path):
     bad.write_text("this is not a mesh\n")
     with pytest.raises(ValueError, match="could not be read"):
         FEMSubstrate(bad, E=300e9, nu=0.21, alpha=8.1e-6)
+
+
+@pytest.mark.parametrize("element", ["tri", "quad"])
+def test_recipe_names_faces_of_a_micrometre_box(tmp_path, monkeypatch, element):
+    """Regression: gmsh pads bounding boxes by ~1e-7 model units, 0.2 % of a 0.1 mm thick
+    box, and the face naming skipped the bottom line; faces come from exact corners now."""
+    import meshio
+
+    from sphfem.fem.meshing import substrate_rect
+
+    monkeypatch.setenv("SPHFEM_CACHE", str(tmp_path))
+    path = substrate_rect(size=(0.8e-3, 0.1e-3), origin=(-0.4e-3, -0.1e-3), h_fine=2e-5,
+                          h_coarse=1e-4, refine_center=(0.0, 0.0), refine_radius=0.2e-3,
+                          element=element)
+    names = set(meshio.read(path).field_data)
+    assert {"top", "bottom", "left", "right", "substrate"} <= names

@@ -216,8 +216,9 @@ def test_insulated_rod_relaxes_to_mean():
 
 def test_corrected_free_surface_is_stable():
     """The corrected operator alone is unstable at a free face (eigenvalue with large
-    positive real part); plain rows within R of the face remove it, and a perturbed set
-    without free faces keeps the corrected rows everywhere."""
+    positive real part); plain rows within R of the face remove it, so does the positivity
+    limiter on its own, and a perturbed set without free faces keeps the corrected rows
+    everywhere."""
     from sphfem.heat.system import HeatSystem
 
     x, dx = square(12, 0.2, seed=2)
@@ -227,8 +228,14 @@ def test_corrected_free_surface_is_stable():
     s = fixed.system
     bare = HeatSystem(s.kernel_args, s.rho_c, s.k, s.active, s.ghost_index, s.ghost_type,
                       s.ghost_source, s.ghost_t_wall, laplacian="fatehi_manzari",
-                      dirichlet_mode="antisymmetric", ghost_ratio=s.ghost_ratio)
+                      dirichlet_mode="antisymmetric", ghost_ratio=s.ghost_ratio,
+                      limiter=False)
     assert np.linalg.eigvals(bare.matrix()[0].toarray()).real.max() > 1.0
+    limited = HeatSystem(s.kernel_args, s.rho_c, s.k, s.active, s.ghost_index, s.ghost_type,
+                         s.ghost_source, s.ghost_t_wall, laplacian="fatehi_manzari",
+                         dirichlet_mode="antisymmetric", ghost_ratio=s.ghost_ratio)
+    assert limited.limited > 0
+    assert np.linalg.eigvals(limited.matrix()[0].toarray()).real.max() < 0.0
     assert s.plain_rows.sum() >= 3 * 12 - 1
     assert np.linalg.eigvals(s.matrix()[0].toarray()).real.max() < 0.0
     closed = build_problem(x, dx * dx, 1.0, 1.0, 1.0, 0.0, dx, square_faces_dirichlet(),

@@ -110,8 +110,11 @@ def _name_boundaries(gmsh, dim: int, lo, hi, volume_name="substrate") -> None:
     groups: dict[str, list[int]] = {n: [] for n in names}
     span = np.asarray(hi, float) - np.asarray(lo, float)
     for _, tag in gmsh.model.getEntities(dim - 1):
-        bb = np.array(gmsh.model.getBoundingBox(dim - 1, tag))
-        bmin, bmax = bb[:3][:dim], bb[3:][:dim]
+        # exact extent from the entity's corner points: getBoundingBox pads by the geometry
+        # tolerance (~1e-7 model units), which is 0.1 % of a 0.1 mm box
+        corners = gmsh.model.getBoundary([(dim - 1, tag)], combined=False, recursive=True)
+        xyz = np.array([gmsh.model.getValue(0, t, []) for d, t in corners if d == 0])
+        bmin, bmax = xyz.min(axis=0)[:dim], xyz.max(axis=0)[:dim]
         ext = (bmax - bmin) / span
         ax = int(np.argmin(ext))  # a face of the box is flat along exactly one axis
         if ext[ax] > 1e-3:

@@ -123,14 +123,18 @@ class Ghosts:
 
 
 def _beyond(p: np.ndarray, faces: list[Face], R: float) -> np.ndarray:
-    """(n, nfaces) bool: point beyond face f (outside its plane, within its lateral extent
-    enlarged by R) and penetration depth (n, nfaces)."""
+    """(n, nfaces) bool: point beyond face f (outside its plane by at most R, within its
+    lateral extent enlarged by R) and penetration depth (n, nfaces).
+
+    The depth limit keeps a face to its own neighbourhood: a point beyond one block's face
+    is not also "beyond" the parallel face of another block far away (which would mirror
+    its source into that block)."""
     n = p.shape[0]
     out = np.zeros((n, len(faces)), dtype=bool)
     depth = np.zeros((n, len(faces)))
     for f, face in enumerate(faces):
         d = face.side * (p[:, face.axis] - face.position)
-        b = d > 1e-12 * max(1.0, abs(face.position))
+        b = (d > 1e-12 * max(1.0, abs(face.position))) & (d <= R * (1.0 + 1e-12))
         for a in range(p.shape[1]):
             if a == face.axis:
                 continue
@@ -153,6 +157,33 @@ def number_density(x, vol, R, kernel: str = "wendland_c2", period=None):
     nl = build_neighbor_list(x, R, lo, hi, period)
     return interpolate(np.ones(x.shape[0]), x, vol, nl.offsets, nl.indices, R, sigma, kind,
                        period)
+
+
+def _owner_mask(p: np.ndarray, faces: list[Face]) -> np.ndarray:
+    """(n, nfaces) bool: face f belongs to the box nearest to point p (faces without a box
+    always count).
+
+    With several blocks, a ghost below block a next to block b lies laterally within R of
+    b's face at the a|b interface too; only the faces of the block the ghost hangs off (the
+    nearest box) may mirror it, or its source lands in the wrong block."""
+    boxes = {}
+    fid = []
+    for fc in faces:
+        key = None if fc.lo is None else (tuple(fc.lo), tuple(fc.hi))
+        fid.append(boxes.setdefault(key, len(boxes)))
+    fid = np.array(fid)
+    dist = np.zeros((p.shape[0], len(boxes)))
+    for key, b in boxes.items():
+        if key is not None:
+            lo, hi = np.array(key[0]), np.array(key[1])
+            gap = np.maximum(np.maximum(lo - p, p - hi), 0.0)
+            dist[:, b] = np.sqrt((gap**2).sum(axis=1))
+    nearest = dist.min(axis=1, keepdims=True)
+    box_ok = dist <= nearest * (1 + 1e-12) + 1e-300
+    for key, b in boxes.items():
+        if key is None:
+            box_ok[:, b] = True
+    return box_ok[:, fid]
 
 
 def place_ghosts(x, vol, dx: float, R: float, faces: list[Face], *, kernel="wendland_c2",
@@ -189,6 +220,9 @@ def place_ghosts(x, vol, dx: float, R: float, faces: list[Face], *, kernel="wend
     idx = np.unique(idx[near <= R * (1 + 1e-12)], axis=0)
     pts = origin + dx * idx
     beyond, depth = _beyond(pts, faces, R)
+    owner = _owner_mask(pts, faces)
+    beyond &= owner
+    depth = np.where(owner, depth, 0.0)
     is_free = np.array([f.bc == "free" for f in faces])
     keep = beyond.any(axis=1) & ~(beyond & is_free).any(axis=1)
     tree = cKDTree(x)
@@ -213,10 +247,16 @@ def place_ghosts(x, vol, dx: float, R: float, faces: list[Face], *, kernel="wend
     gtype = np.where(has_dir, DIRICHLET, INSULATED).astype(np.int8)
     t_wall = np.array([faces[f].temperature if t == DIRICHLET else np.nan
                        for f, t in zip(face, gtype, strict=True)])
+    # mirror once per axis, about the plane the ghost is deepest beyond on that axis (two
+    # blocks' coplanar faces must not mirror it twice, back onto itself)
     mirror = pts.copy()
-    for f, fc in enumerate(faces):
-        sel = beyond[:, f]
-        mirror[sel, fc.axis] = 2.0 * fc.position - mirror[sel, fc.axis]
+    for a in range(dim):
+        on_axis = np.array([fc.axis == a for fc in faces])
+        d_a = np.where(beyond & on_axis, depth, -1.0)
+        f_a = np.argmax(d_a, axis=1)
+        sel = d_a[np.arange(pts.shape[0]), f_a] > 0.0
+        plane = np.array([fc.position for fc in faces])[f_a[sel]]
+        mirror[sel, a] = 2.0 * plane - pts[sel, a]
     if neumann_source == "nearest":
         target = np.where((gtype == INSULATED)[:, None], pts, mirror)
     else:

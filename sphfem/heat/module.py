@@ -13,6 +13,7 @@ the corrected operator, the ghost counts and the energy ledger (drift and balanc
 from __future__ import annotations
 
 import numpy as np
+from numba import njit
 
 from sphfem.heat.params import HeatParams, params_from_scene
 from sphfem.particles import GHOST, ParticleSet
@@ -71,6 +72,15 @@ class HeatConduction(PhysicsModule):
 
         self.ledger = EnergyLedger(self.system.energy(ps.T, ps.m, ps.c_heat))
         self.stable_dt_explicit = self.system.stable_dt()
+        real = ps.T[: n]
+        walls = gh.t_wall[np.isfinite(gh.t_wall)] if gh.n else np.zeros(0)
+        lo = min(float(real.min()), float(walls.min()) if walls.size else np.inf)
+        hi = max(float(real.max()), float(walls.max()) if walls.size else -np.inf)
+        if getattr(self, "bounds", None) is None:  # a resumed run keeps the original range
+            width = max(hi - lo, 1e-12 * max(abs(lo), abs(hi), 1.0))
+            m = prm.bound_margin * width
+            self.bounds = (lo - m, hi + m)
+        self.T_range = [float(real.min()), float(real.max())]
 
     def _build(self, sim) -> None:
         from sphfem.heat.problem import free_surface_rows
@@ -86,7 +96,8 @@ class HeatConduction(PhysicsModule):
         self.system = HeatSystem(args, ps.m * ps.c_heat / ps.vol, ps.k_heat, active,
                                  self._ghost_index, gh.type, self._ghost_source, gh.t_wall,
                                  laplacian=prm.laplacian, dirichlet_mode=prm.dirichlet_ghosts,
-                                 plain_rows=plain, ghost_ratio=gh.ratio)
+                                 plain_rows=plain, ghost_ratio=gh.ratio,
+                                 limiter=prm.positivity_limiter)
         self.system.apply_ghosts(ps.T)
         if prm.time_integration == "explicit":
             self.stepper = ExplicitStepper(self.system)
@@ -112,6 +123,26 @@ class HeatConduction(PhysicsModule):
         ps = sim.particles
         heat = self.stepper.step(ps.T, dt)
         self.ledger.record(self.system.energy(ps.T, ps.m, ps.c_heat), heat)
+        self._check_bounds(sim)
+
+    def _check_bounds(self, sim) -> None:
+        """Stop the run when a temperature leaves the maximum-principle range (or is NaN)."""
+        T = sim.particles.T[self.system.active]
+        lo, hi = _min_max(T)
+        self.T_range = [lo, hi]
+        b_lo, b_hi = self.bounds
+        if lo >= b_lo and hi <= b_hi:  # False for NaN
+            return
+        from sphfem.simulation import SimulationStopped
+
+        bad = ~((T >= b_lo) & (T <= b_hi))
+        raise SimulationStopped(
+            f"heat stopped at step {sim.step_count + 1}, t = {sim.t:.6g} s: {int(bad.sum())} "
+            f"particle(s) with temperature outside [{b_lo:.6g}, {b_hi:.6g}] K (min "
+            f"{lo:.6g}, max {hi:.6g}), the initial/wall range widened by heat.bound_margin = "
+            f"{self.params.bound_margin:g}; conduction cannot create extremes, so the "
+            "explicit step is above its stable limit (keep [time] cap_dt = true, or use "
+            "heat.time_integration = \"implicit\")")
 
     def reorder(self, sim, perm) -> None:
         """Remap the cached ghost indices after the driver's cell sort."""
@@ -136,10 +167,25 @@ class HeatConduction(PhysicsModule):
             "explicit_stable_dt_s": self.stable_dt_explicit,
             "explicit_dt_constant_C": float(C.min()) if C.size else None,
             "fallbacks": s.fallbacks,
+            "limited_rows": s.limited,
             "free_surface_plain_rows": int(s.plain_rows.sum()),
             "ghosts": dict(self.ghosts.stats),
+            "T_range_K": list(self.T_range),
+            "T_bounds_K": list(self.bounds),
             **self.ledger.to_dict(),
         }
+
+
+@njit(cache=True)
+def _min_max(a):
+    """(min, max) of ``a``; NaN when any entry is NaN."""
+    lo, hi = np.inf, -np.inf
+    for v in a:
+        if v != v:
+            return np.nan, np.nan
+        lo = min(lo, v)
+        hi = max(hi, v)
+    return lo, hi
 
 
 def _kernel_name(code: int) -> str:

@@ -63,6 +63,8 @@ class HeatParams:
     dt: float | None = None
     cfl: float = 1.0
     startup: int = 1
+    bound_margin: float = 0.1
+    positivity_limiter: bool = True
     free_surface_plain: float = 0.85
     eta_place: float = 0.85
     eta_trim: float = 1.3
@@ -86,6 +88,8 @@ class HeatParams:
             raise ValueError("heat.dirichlet_ghosts must be 'hold' or 'antisymmetric'")
         if self.insulated_source not in ("mirror", "nearest"):
             raise ValueError("heat.insulated_source must be 'mirror' or 'nearest'")
+        if not self.bound_margin >= 0.0:
+            raise ValueError(f"heat.bound_margin must be >= 0, got {self.bound_margin}")
         if not 0.0 < self.eta_place < self.eta_trim:
             raise ValueError("heat: need 0 < eta_place < eta_trim")
 
@@ -94,8 +98,8 @@ def params_from_scene(scene) -> HeatParams:
     """:class:`HeatParams` from a validated scene's ``[heat]`` section and its box blocks."""
     h = scene.heat
     keys = ("laplacian", "time_integration", "theta", "implicit_dt_factor", "dt", "cfl",
-            "startup", "free_surface_plain", "eta_place", "eta_trim", "dirichlet_ghosts",
-            "insulated_source")
+            "startup", "bound_margin", "positivity_limiter", "free_surface_plain", "eta_place",
+            "eta_trim", "dirichlet_ghosts", "insulated_source")
     kw = {k: h[k] for k in keys} if h is not None else {}
     boundaries = {}
     for b in (h.boundaries if h is not None else ()):

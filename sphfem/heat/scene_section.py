@@ -46,6 +46,14 @@ HEAT = Section("heat", (
           doc="fixed heat step (overrides implicit_dt_factor)"),
     Param("cfl", float, 1.0, gt=0.0, le=1.0,
           doc="safety factor on the explicit limit dt = 1/max_i sum_j |g_ij|/(rho c)_i"),
+    Param("positivity_limiter", bool, True,
+          doc="fatehi_manzari: blend each row holding a negative weight with its plain row "
+              "until every weight is >= 0 (keeps explicit steps stable and the maximum "
+              "principle on disordered particles; lattice interiors keep the exact weights)"),
+    Param("bound_margin", float, 0.1, ge=0.0,
+          doc="guard: stop when a temperature leaves [T_min - m dT, T_max + m dT], the range "
+              "of the initial and wall temperatures widened by this fraction m of its width "
+              "dT (conduction obeys a maximum principle; a violation means instability)"),
     Param("startup", int, 1, ge=0,
           doc="Crank-Nicolson steps taken as two backward-Euler half steps (Rannacher)"),
     Param("free_surface_plain", float, 0.85, gt=0.0, le=1.0,

@@ -40,7 +40,8 @@ class HeatSystem:
 
     def __init__(self, kernel_args, rho_c, k, active, ghost_index=None, ghost_type=None,
                  ghost_source=None, ghost_t_wall=None, laplacian: str = "cleary",
-                 dirichlet_mode: str = "hold", plain_rows=None, ghost_ratio=None):
+                 dirichlet_mode: str = "hold", plain_rows=None, ghost_ratio=None,
+                 limiter: bool = True):
         self.kernel_args = kernel_args
         x, vol, offsets, indices = kernel_args[:4]
         self.offsets, self.indices = offsets, indices
@@ -67,9 +68,12 @@ class HeatSystem:
             raise ValueError("every ghost source must be an active particle")
         self.plain_rows = (np.zeros(self.n, bool) if plain_rows is None
                            else np.asarray(plain_rows, bool) & self.active)
-        self.g, ok = pair_conductances(self.k, *kernel_args, laplacian=laplacian,
-                                       plain_rows=self.plain_rows)
+        self.g, ok, self.beta = pair_conductances(
+            self.k, *kernel_args, laplacian=laplacian, plain_rows=self.plain_rows,
+            limiter_rows=self.active if limiter else None)
         self.ok = ok
+        #: rows of the corrected form blended towards the plain one by the positivity limiter
+        self.limited = int(np.count_nonzero(self.beta[self.active] > 0))
         # fallbacks counted over active particles only (ghosts' rows are never used)
         self.fallbacks = int((~ok[self.active]).sum())
         # conductances to non-active neighbours (ghosts, held particles): boundary heat
