@@ -51,7 +51,8 @@ def _parser() -> argparse.ArgumentParser:
                    help="with 'all': folder for report.md and each case's JSON and PNG")
     v.add_argument("--overwrite", action="store_true", help="replace an existing --out folder")
     v.add_argument("--update-readme", metavar="README",
-                   help="with 'all': write the verdict table into README's marked block")
+                   help="with 'all' or 'stability': write the table into README's marked "
+                        "block")
 
     b = sub.add_parser("bench", help="throughput benchmarks",
                        description="Throughput: neighbour search, summation density, fluid steps.")
@@ -141,6 +142,11 @@ def _validate_stability(args) -> int:
         print(f"report: {Path(out) / 'stability.md'}")
     if args.json:
         write_json(args.json, report)
+    if args.update_readme:
+        from sphfem.validation.report import STABILITY_BEGIN, STABILITY_END, update_readme
+
+        update_readme(Path(args.update_readme), stability.table(results), args.quick,
+                      case="stability", begin=STABILITY_BEGIN, end=STABILITY_END)
     bad = [r.name for r in results if not r.passed]
     print("PASSED" if not bad else f"FAILED: {', '.join(bad)}")
     return EXIT_OK if not bad else EXIT_FAIL

@@ -203,6 +203,7 @@ class Simulation:
             series.write(self.t, self.particles, fields)
         next_out = self.t + every if every else np.inf
         dts, limiter_counts = [], {}
+        limit_min = np.inf  # smallest step the limits allowed (before output/end truncation)
         status, message = "completed", ""
         wall0 = time.perf_counter()
         bar = tqdm(total=t_end, unit="s", disable=not progress or None, leave=False,
@@ -214,6 +215,7 @@ class Simulation:
                     status = "max_steps"
                     break
                 dt, limiter = self.stable_dt()
+                limit_min = min(limit_min, dt)
                 dt = min(dt, t_end - self.t)
                 if every:
                     dt = min(dt, max(next_out - self.t, 1e-300))
@@ -238,6 +240,7 @@ class Simulation:
             message += (f" (the non-finite state was not written; the last output is "
                         f"t = {series.entries[-1][0]:.6g} s)")
         summary = self.summary(status, message, wall, dts, limiter_counts)
+        summary["dt"]["min_allowed"] = float(limit_min) if np.isfinite(limit_min) else None
         write_json(out / "summary.json", summary)
         if status == "stopped":
             raise SimulationStopped(message)
