@@ -216,17 +216,34 @@ class CouplingDriver:
 
 
 def build_substrate(scene, cfg, region_lo, region_hi, T0: float):
-    """The :class:`sphfem.fem.FEMSubstrate` of a ``[coupling]`` section."""
+    """The :class:`sphfem.fem.FEMSubstrate` of a ``[coupling]`` section.
+
+    The mesh is read and its boundary groups checked against ``clamps``, ``rollers`` and
+    ``surface`` before anything is assembled; a missing or unreadable ``mesh_file``, a mesh
+    of the wrong dimension or an unknown group raises :class:`sphfem.schema.SceneError`
+    naming the scene key (``coupling.mesh_file``, ``coupling.clamps[0]``, ...).
+    """
     from sphfem.fem import FEMSubstrate, substrate_block, substrate_rect
+    from sphfem.fem.substrate import load_mesh
+    from sphfem.schema import SceneError
 
     mat = scene.materials[cfg.material]
     alpha = mat.alpha or 0.0
     dim = scene.dim
+    source = scene.source or ""
     if cfg.mesh_file is not None:
         path = Path(cfg.mesh_file)
         if not path.is_absolute() and scene.source and not scene.source.startswith("<"):
             path = Path(scene.source).resolve().parent / path
-        mesh = path
+        t0 = time.perf_counter()
+        try:
+            mesh = load_mesh(path)
+        except Exception as e:  # whatever meshio / scikit-fem make of a user's file
+            said = " ".join(str(e).split()) or type(e).__name__
+            if not isinstance(e, (OSError, ValueError)) or str(path) not in said:
+                said = f"mesh file {path} could not be read ({said})"
+            raise SceneError(source, "coupling.mesh_file", said) from None
+        what, key = f"mesh file {path}", "coupling.mesh_file"
     else:
         m = cfg["mesh"]
         lo = np.array(m.lo if m.lo is not None else region_lo, float)
@@ -242,12 +259,33 @@ def build_substrate(scene, cfg, region_lo, region_hi, T0: float):
                   h_coarse=max(h_coarse, h_fine), refine_center=center, refine_radius=radius,
                   growth=m.growth)
         if dim == 3:
-            mesh = substrate_block(element=m.cells or "hex", **kw)
+            path = substrate_block(element=m.cells or "hex", **kw)
         else:
-            mesh = substrate_rect(element=m.cells or "quad", **kw)
-    return FEMSubstrate(mesh, E=mat.E, nu=mat.nu, alpha=alpha, T0=T0, element=cfg.element,
-                        clamps=list(cfg.clamps), rollers=dict(cfg.rollers or {}),
-                        solver=cfg.solver)
+            path = substrate_rect(element=m.cells or "quad", **kw)
+        t0 = time.perf_counter()
+        mesh = load_mesh(path)
+        what, key = "the [coupling.mesh] recipe's mesh", "coupling.mesh"
+    t_load = time.perf_counter() - t0
+    if mesh.p.shape[0] != dim:
+        raise SceneError(source, key, f"{what} is {mesh.p.shape[0]}D but the scene is {dim}D")
+    groups = sorted(mesh.boundaries or {})
+
+    def need(k: str, group: str) -> None:
+        if group not in groups:
+            raise SceneError(source, k, f"{what} has no boundary group {group!r}; available: "
+                                        f"{', '.join(groups) if groups else '(none)'}")
+
+    for i, g in enumerate(cfg.clamps):
+        need(f"coupling.clamps[{i}]", g)
+    for g in cfg.rollers or {}:
+        need(f"coupling.rollers.{g}", g)
+    need("coupling.surface", cfg.surface)
+    sub = FEMSubstrate(mesh, E=mat.E, nu=mat.nu, alpha=alpha, T0=T0, element=cfg.element,
+                       clamps=list(cfg.clamps), rollers=dict(cfg.rollers or {}),
+                       solver=cfg.solver)
+    sub.mesh_path = Path(path)
+    sub.timings["load_mesh"] = t_load
+    return sub
 
 
 class CouplingModule(PhysicsModule):
