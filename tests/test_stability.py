@@ -131,7 +131,8 @@ def test_validate_stability_quick_exits_zero(tmp_path, capsys):
     assert set(rows) == {r.name for r in S.ROWS}
     for name in ("heat-dt-2x", "heat-dt-8x", "fluid-dt-8x"):
         assert rows[name]["verdict"] == S.STOPPED and rows[name]["reason"], name
-    for name in ("stiff-substrate-300GPa", "thermal-shock-1000K", "disordered-20pct",
+    for name in ("stiff-substrate-300GPa", "stiff-substrate-300GPa-tlsph", "thermal-shock-1000K",
+                 "disordered-20pct",
                  "heat-dt-0.9x", "heat-dt-2x-capped", "fluid-dt-2x-capped"):
         assert rows[name]["verdict"] == S.STABLE, (name, rows[name]["reason"])
     assert "| stiff-substrate-300GPa | stable |" in (tmp_path / "st" / "stability.md").read_text()
