@@ -217,26 +217,130 @@ def _invert(M, dim, Binv, cond_max):
 
 
 @njit(cache=True, inline="always")
+def _invert_sym(m00, m01, m02, m11, m12, m22, dim, cond_max):
+    """:func:`_invert` of the symmetric matrix [[m00 m01 m02] [m01 m11 m12] [m02 m12 m22]]
+    on scalars (no temporary arrays): (good, b00, b01, b02, b10, b11, b12, b20, b21, b22)."""
+    M = ((m00, m01, m02), (m01, m11, m12), (m02, m12, m22))
+    na = 0.0
+    for q in range(dim):
+        s = 0.0
+        for p in range(dim):
+            s += abs(M[p][q])
+        na = max(na, s)
+    b00 = b01 = b02 = b10 = b11 = b12 = b20 = b21 = b22 = 0.0
+    good = na != 0.0
+    if good:
+        if dim == 1:
+            b00 = 1.0 / m00
+        elif dim == 2:
+            det = m00 * m11 - m01 * m01
+            if abs(det) < 1e-14 * na * na:
+                good = False
+            else:
+                b00 = m11 / det
+                b01 = -m01 / det
+                b10 = -m01 / det
+                b11 = m00 / det
+        else:
+            c00 = m11 * m22 - m12 * m12
+            c01 = m12 * m02 - m01 * m22
+            c02 = m01 * m12 - m11 * m02
+            det = m00 * c00 + m01 * c01 + m02 * c02
+            if abs(det) < 1e-14 * na * na * na:
+                good = False
+            else:
+                idet = 1.0 / det
+                b00 = c00 * idet
+                b10 = c01 * idet
+                b20 = c02 * idet
+                b01 = (m02 * m12 - m01 * m22) * idet
+                b11 = (m00 * m22 - m02 * m02) * idet
+                b21 = (m01 * m02 - m00 * m12) * idet
+                b02 = (m01 * m12 - m02 * m11) * idet
+                b12 = (m02 * m01 - m00 * m12) * idet
+                b22 = (m00 * m11 - m01 * m01) * idet
+    if good:
+        B = ((b00, b01, b02), (b10, b11, b12), (b20, b21, b22))
+        ni = 0.0
+        for q in range(dim):
+            s = 0.0
+            for p in range(dim):
+                s += abs(B[p][q])
+            ni = max(ni, s)
+        c = na * ni
+        good = c <= cond_max and np.isfinite(c)
+    return good, b00, b01, b02, b10, b11, b12, b20, b21, b22
+
+
+@njit(cache=True, inline="always")
 def _emit_other_row(x, kind, i, offsets, indices, R2, dim, period, periodic, nb):
-    """Compact a non-fluid row: a wall keeps its fluid neighbours with 0 < r < R."""
+    """Compact a non-fluid row: a wall keeps its fluid neighbours with 0 < r < R
+    (branch-free: every entry is stored, the slot advances only when it is kept)."""
     if kind[i] != WALL:
         return 0
     c = 0
     o = offsets[i]
     for jj in range(o, offsets[i + 1]):
         j = indices[jj]
-        if kind[j] != FLUID:
-            continue
         r0, r1, r2 = _sep(x, i, j, dim, period, periodic)
         d2 = r0 * r0 + r1 * r1 + r2 * r2
-        if d2 >= R2 or d2 == 0.0:
-            continue
         nb[o + c] = j
-        c += 1
+        c += (kind[j] == FLUID) & ~((d2 >= R2) | (d2 == 0.0))
     return c
 
 
-@njit(cache=True, parallel=True, fastmath=FASTMATH)
+@njit(cache=True)
+def _fast_case(dim, periodic, kkind):
+    """2 or 3: the pair loops run a version compiled for this dim, Wendland C2 and no
+    periodic axis; 0: the generic version."""
+    if kkind == WENDLAND_C2 and not periodic and (dim == 2 or dim == 3):
+        return dim
+    return 0
+
+
+@njit(cache=True, inline="always")
+def _mark_row(x, i, src, dst, R2, dim, period, periodic):
+    """dst[k] = src[k] where 0 < |x_src[k] - x_i| < R, else -1.  No branches and no
+    loop-carried dependency (unlike a compacting store), so the out-of-order core overlaps
+    the iterations (LLVM does not vectorise it: the stores may alias x)."""
+    for k in range(src.shape[0]):
+        jj = src[k]
+        j = np.uint32(jj)  # unsigned: no negative-index wraparound
+        r0, r1, r2 = _sep(x, i, j, dim, period, periodic)
+        d2 = r0 * r0 + r1 * r1 + r2 * r2
+        dst[k] = -1 if (d2 >= R2) | (d2 == 0.0) else jj
+
+
+@njit(cache=True, inline="always")
+def _squeeze(row):
+    """Move the entries >= 0 of ``row`` to its front (in place, order kept); their count."""
+    c = 0
+    for k in range(row.shape[0]):
+        v = row[k]
+        row[c] = v
+        c += v >= 0
+    return c
+
+
+@njit(cache=True, inline="always")
+def _emit_fluid_row(x, i, offsets, indices, R2, dim, period, periodic, nb, fast):
+    """Compact a fluid row: its neighbours with 0 < r < R into ``nb[o : o + c]``, in order;
+    returns c.  A marking loop (versioned like the pair loops, ``fast``:
+    :func:`_fast_case`), then a branch-free squeeze."""
+    o = offsets[i]
+    e = offsets[i + 1]
+    src = indices[o:e]
+    dst = nb[o:e]
+    if fast == 3:
+        _mark_row(x, i, src, dst, R2, 3, period, False)
+    elif fast == 2:
+        _mark_row(x, i, src, dst, R2, 2, period, False)
+    else:
+        _mark_row(x, i, src, dst, R2, dim, period, periodic)
+    return _squeeze(dst)
+
+
+@njit(cache=True, parallel=True, fastmath=FASTMATH, error_model="numpy")
 def compact_rows(x, kind, offsets, indices, R, period, nb, cnt):
     """In-range rows of the fluid's view: ``nb[offsets[i] : offsets[i] + cnt[i]]``.
 
@@ -251,25 +355,50 @@ def compact_rows(x, kind, offsets, indices, R, period, nb, cnt):
     periodic = False
     for k in range(dim):
         periodic |= period[k] > 0.0
+    fast = _fast_case(dim, periodic, WENDLAND_C2)
     for i in prange(n):
         if kind[i] != FLUID:
             cnt[i] = _emit_other_row(x, kind, i, offsets, indices, R2, dim, period, periodic,
                                      nb)
-            continue
-        c = 0
-        o = offsets[i]
-        for jj in range(o, offsets[i + 1]):
-            j = indices[jj]
-            r0, r1, r2 = _sep(x, i, j, dim, period, periodic)
-            d2 = r0 * r0 + r1 * r1 + r2 * r2
-            if d2 >= R2 or d2 == 0.0:
-                continue
-            nb[o + c] = j
-            c += 1
-        cnt[i] = c
+        else:
+            cnt[i] = _emit_fluid_row(x, i, offsets, indices, R2, dim, period, periodic, nb,
+                                     fast)
 
 
-@njit(cache=True, parallel=True, fastmath=FASTMATH)
+@njit(cache=True, inline="always")
+def _dg_sums(x, rho, V, nb, o, c, i, R, fac2, kkind, dim, period, periodic):
+    """Moment matrix and un-normalised density gradient of row i over its compacted
+    neighbours ``nb[o : o + c]`` (no branches in the loop: it vectorises)."""
+    m00 = 0.0
+    m01 = 0.0
+    m02 = 0.0
+    m11 = 0.0
+    m12 = 0.0
+    m22 = 0.0
+    g0 = 0.0
+    g1 = 0.0
+    g2 = 0.0
+    ri = rho[i]
+    row = nb[o:o + c]
+    for k in range(c):
+        j = np.uint32(row[k])  # unsigned: no negative-index wraparound in the gathers
+        r0, r1, r2 = _sep(x, i, j, dim, period, periodic)
+        d2 = r0 * r0 + r1 * r1 + r2 * r2
+        s = V[j] * _F(np.sqrt(d2), R, fac2, kkind)  # V_j F
+        t = s * (rho[j] - ri)
+        g0 += t * r0
+        g1 += t * r1
+        g2 += t * r2
+        m00 += s * r0 * r0
+        m01 += s * r0 * r1
+        m02 += s * r0 * r2
+        m11 += s * r1 * r1
+        m12 += s * r1 * r2
+        m22 += s * r2 * r2
+    return m00, m01, m02, m11, m12, m22, g0, g1, g2
+
+
+@njit(cache=True, parallel=True, fastmath=FASTMATH, error_model="numpy")
 def density_gradient(x, rho, V, kind, offsets, indices, R, sigma, kkind, period, cond_max,
                      grad, ok, nb, cnt):
     """Renormalised density gradient of every fluid particle (rows of others are zeroed).
@@ -280,6 +409,8 @@ def density_gradient(x, rho, V, kind, offsets, indices, R, sigma, kkind, period,
 
     Also compacts the rows as :func:`compact_rows` does (``nb``, ``cnt``), from the pair
     distances it computes anyway: the later passes then visit only the in-range pairs.
+    Per row, a branch-free compaction loop over the Verlet row, then the sums over the
+    compacted row (a loop without branches, which LLVM vectorises).
     """
     n, dim = x.shape
     R2 = R * R
@@ -287,6 +418,7 @@ def density_gradient(x, rho, V, kind, offsets, indices, R, sigma, kkind, period,
     periodic = False
     for k in range(dim):
         periodic |= period[k] > 0.0
+    fast = _fast_case(dim, periodic, kkind)
     for i in prange(n):
         if kind[i] != FLUID:
             for k in range(dim):
@@ -295,60 +427,36 @@ def density_gradient(x, rho, V, kind, offsets, indices, R, sigma, kkind, period,
             cnt[i] = _emit_other_row(x, kind, i, offsets, indices, R2, dim, period, periodic,
                                      nb)
             continue
-        c = 0
         o = offsets[i]
-        m00 = 0.0
-        m01 = 0.0
-        m02 = 0.0
-        m11 = 0.0
-        m12 = 0.0
-        m22 = 0.0
-        g0 = 0.0
-        g1 = 0.0
-        g2 = 0.0
-        ri = rho[i]
-        for jj in range(offsets[i], offsets[i + 1]):
-            j = indices[jj]
-            r0, r1, r2 = _sep(x, i, j, dim, period, periodic)
-            d2 = r0 * r0 + r1 * r1 + r2 * r2
-            if d2 >= R2 or d2 == 0.0:
-                continue
-            nb[o + c] = j
-            c += 1
-            s = V[j] * _F(np.sqrt(d2), R, fac2, kkind)  # V_j F
-            t = s * (rho[j] - ri)
-            g0 += t * r0
-            g1 += t * r1
-            g2 += t * r2
-            m00 += s * r0 * r0
-            m01 += s * r0 * r1
-            m02 += s * r0 * r2
-            m11 += s * r1 * r1
-            m12 += s * r1 * r2
-            m22 += s * r2 * r2
+        c = _emit_fluid_row(x, i, offsets, indices, R2, dim, period, periodic, nb, fast)
         cnt[i] = c
-        M = np.empty((3, 3))
-        M[0, 0] = m00
-        M[0, 1] = m01
-        M[0, 2] = m02
-        M[1, 0] = m01
-        M[1, 1] = m11
-        M[1, 2] = m12
-        M[2, 0] = m02
-        M[2, 1] = m12
-        M[2, 2] = m22
-        Bi = np.empty((3, 3))
-        good = _invert(M, dim, Bi, cond_max)
+        # the loop versioned with constant kernel, dim and periodicity for the common
+        # cases (loop-invariant branches inside the loop block or blunt SIMD)
+        if fast == 3:
+            m00, m01, m02, m11, m12, m22, g0, g1, g2 = _dg_sums(
+                x, rho, V, nb, o, c, i, R, fac2, WENDLAND_C2, 3, period, False)
+        elif fast == 2:
+            m00, m01, m02, m11, m12, m22, g0, g1, g2 = _dg_sums(
+                x, rho, V, nb, o, c, i, R, fac2, WENDLAND_C2, 2, period, False)
+        else:
+            m00, m01, m02, m11, m12, m22, g0, g1, g2 = _dg_sums(
+                x, rho, V, nb, o, c, i, R, fac2, kkind, dim, period, periodic)
+        good, b00, b01, b02, b10, b11, b12, b20, b21, b22 = _invert_sym(
+            m00, m01, m02, m11, m12, m22, dim, cond_max)
         ok[i] = good
-        g = (g0, g1, g2)
-        for p in range(dim):
-            if good:
-                acc = 0.0
-                for q in range(dim):
-                    acc += Bi[p, q] * g[q]
-                grad[i, p] = acc
-            else:
-                grad[i, p] = g[p]
+        if good:
+            grad[i, 0] = b00 * g0 + b01 * g1 + b02 * g2 if dim > 2 else (
+                b00 * g0 + b01 * g1 if dim > 1 else b00 * g0)
+            if dim > 1:
+                grad[i, 1] = b10 * g0 + b11 * g1 + b12 * g2 if dim > 2 else b10 * g0 + b11 * g1
+            if dim > 2:
+                grad[i, 2] = b20 * g0 + b21 * g1 + b22 * g2
+        else:
+            grad[i, 0] = g0
+            if dim > 1:
+                grad[i, 1] = g1
+            if dim > 2:
+                grad[i, 2] = g2
 
 
 # columns of the packed per-particle rows read by the force pass (one or two cache lines
@@ -382,10 +490,10 @@ def pack_rows(x, v, vg, rho, pr, V, meff, isf, mu, grad, P):
 
 
 @njit(cache=True, inline="always")
-def _psep(P, i, j, period, periodic):
+def _psep(P, i, j, period, periodic, dim=3):
     r0 = P[j, 0] - P[i, 0]
-    r1 = P[j, 1] - P[i, 1]
-    r2 = P[j, 2] - P[i, 2]
+    r1 = P[j, 1] - P[i, 1] if dim > 1 else 0.0
+    r2 = P[j, 2] - P[i, 2] if dim > 2 else 0.0
     if periodic:
         r0 = min_image(r0, period[0])
         r1 = min_image(r1, period[1])
@@ -393,7 +501,105 @@ def _psep(P, i, j, period, periodic):
     return r0, r1, r2
 
 
-@njit(cache=True, parallel=True, fastmath=FASTMATH)
+@njit(cache=True, inline="always")
+def _fluid_row_sums(P, i, row, R2, R, fac2, kkind, dim, pp, periodic, eps2, art_coef):
+    """Pair sums of fluid row i over ``row`` (its neighbour indices): acceleration (3),
+    continuity and delta-SPH sums.  Pairs at r >= R or r = 0 and massless neighbours are
+    skipped (none are left in a compacted row).  No loop-invariant branches (the caller
+    versions ``dim``, ``kkind``, ``periodic``; a zero ``art_coef`` adds exact zeros), so
+    LLVM vectorises the loop (gathers from the packed rows)."""
+    a0 = 0.0
+    a1 = 0.0
+    a2 = 0.0
+    cont = 0.0
+    diff = 0.0
+    ri = P[i, _RHO]
+    pri = P[i, _PR]
+    mui = P[i, _MU]
+    vi0 = P[i, _V]
+    vi1 = P[i, _V + 1]
+    vi2 = P[i, _V + 2]
+    gi0 = P[i, _G]
+    gi1 = P[i, _G + 1]
+    gi2 = P[i, _G + 2]
+    for k in range(row.shape[0]):
+        j = np.uint32(row[k])  # unsigned: no negative-index wraparound in the gathers
+        mj = P[j, _M]
+        r0, r1, r2 = _psep(P, i, j, pp, periodic, dim)
+        d2 = r0 * r0 + r1 * r1 + r2 * r2
+        if d2 >= R2 or d2 == 0.0 or mj == 0.0:
+            continue
+        F = _F(np.sqrt(d2), R, fac2, kkind)
+        rj = P[j, _RHO]
+        fj = P[j, _ISF]
+        # pressure, eq. 2.85: -m_j (p_i/rho_i^2 + p_j/rho_j^2) grad_i W
+        cp = -mj * (pri + P[j, _PR]) * F
+        # viscosity, eq. 2.86 (a wall neighbour takes the fluid's mu, ghost velocity);
+        # one division: 1 / ((r^2 + eps2) (rho_i + rho_j)^2)
+        muj = fj * P[j, _MU] + (1.0 - fj) * mui
+        rs = ri + rj
+        mF = mj * F
+        inv = 1.0 / ((d2 + eps2) * (rs * rs))
+        cv = 4.0 * (mui + muj) * mF * d2 * inv
+        u0 = P[j, _VG] - vi0
+        u1 = P[j, _VG + 1] - vi1 if dim > 1 else 0.0
+        u2 = P[j, _VG + 2] - vi2 if dim > 2 else 0.0
+        cp += 2.0 * art_coef * mF * (u0 * r0 + u1 * r1 + u2 * r2) * rs * inv
+        a0 += cp * r0 + cv * u0
+        a1 += cp * r1 + cv * u1
+        a2 += cp * r2 + cv * u2
+        # continuity, eq. 2.87: rho_i sum V_j (v_i - v_j) . grad_i W (wall: its own v)
+        VF = P[j, _VOL] * F
+        w0 = P[j, _V] - vi0
+        w1 = P[j, _V + 1] - vi1 if dim > 1 else 0.0
+        w2 = P[j, _V + 2] - vi2 if dim > 2 else 0.0
+        cont -= VF * (w0 * r0 + w1 * r1 + w2 * r2)
+        # eqs. 2.88-2.89, fluid-fluid pairs (used when delta_coef != 0)
+        gs = (gi0 + P[j, _G]) * r0
+        if dim > 1:
+            gs += (gi1 + P[j, _G + 1]) * r1
+        if dim > 2:
+            gs += (gi2 + P[j, _G + 2]) * r2
+        diff += fj * ((rj - ri) - 0.5 * gs) * VF
+    return a0, a1, a2, cont, diff
+
+
+@njit(cache=True, inline="always")
+def _wall_row_sums(P, i, row, R2, R, fac2, kkind, dim, pp, periodic, eps2, art_coef):
+    """Pair sums of wall row i (the pair terms of :func:`_fluid_row_sums` with i and j
+    swapped; rows hold fluid neighbours only, others are skipped): its acceleration."""
+    a0 = 0.0
+    a1 = 0.0
+    a2 = 0.0
+    ri = P[i, _RHO]
+    pri = P[i, _PR]
+    wi0 = P[i, _VG]
+    wi1 = P[i, _VG + 1]
+    wi2 = P[i, _VG + 2]
+    for k in range(row.shape[0]):
+        j = np.uint32(row[k])
+        mj = P[j, _M]
+        r0, r1, r2 = _psep(P, i, j, pp, periodic, dim)
+        d2 = r0 * r0 + r1 * r1 + r2 * r2
+        if d2 >= R2 or d2 == 0.0 or P[j, _ISF] == 0.0:
+            continue
+        F = _F(np.sqrt(d2), R, fac2, kkind)
+        rs = ri + P[j, _RHO]
+        mF = mj * F
+        cp = -mF * (pri + P[j, _PR])
+        inv = 1.0 / ((d2 + eps2) * (rs * rs))
+        cv = 8.0 * P[j, _MU] * mF * d2 * inv
+        u0 = P[j, _V] - wi0
+        u1 = P[j, _V + 1] - wi1 if dim > 1 else 0.0
+        u2 = P[j, _V + 2] - wi2 if dim > 2 else 0.0
+        cp += 2.0 * art_coef * mF * (u0 * r0 + u1 * r1 + u2 * r2) * rs * inv
+        a0 += cp * r0 + cv * u0
+        a1 += cp * r1 + cv * u1
+        a2 += cp * r2 + cv * u2
+    return a0, a1, a2
+
+
+@njit(cache=True, parallel=True, fastmath=FASTMATH, error_model="numpy")
 def fluid_forces(P, kind, offsets, cnt, indices, R, sigma, kkind, period, gravity, eps2,
                  delta_coef, art_coef, acc, drho, f_wall):
     """Accelerations and density rates of fluid particles; fluid forces on wall particles.
@@ -417,8 +623,8 @@ def fluid_forces(P, kind, offsets, cnt, indices, R, sigma, kkind, period, gravit
     for k in range(dim):
         periodic |= period[k] > 0.0
         pp[k] = period[k]
+    fast = _fast_case(dim, periodic, kkind)
     use_delta = delta_coef != 0.0
-    use_art = art_coef != 0.0
     for i in prange(n):
         ki = kind[i]
         if ki != FLUID and ki != WALL:
@@ -427,88 +633,35 @@ def fluid_forces(P, kind, offsets, cnt, indices, R, sigma, kkind, period, gravit
                 f_wall[i, k] = 0.0
             drho[i] = 0.0
             continue
-        a0 = 0.0
-        a1 = 0.0
-        a2 = 0.0
-        cont = 0.0
-        diff = 0.0
-        ri = P[i, _RHO]
-        pri = P[i, _PR]
+        row = indices[offsets[i]:offsets[i] + cnt[i]]
         if ki == FLUID:
-            mui = P[i, _MU]
-            vi0 = P[i, _V]
-            vi1 = P[i, _V + 1]
-            vi2 = P[i, _V + 2]
-            gi0 = P[i, _G]
-            gi1 = P[i, _G + 1]
-            gi2 = P[i, _G + 2]
-            for jj in range(offsets[i], offsets[i] + cnt[i]):
-                j = indices[jj]
-                mj = P[j, _M]
-                r0, r1, r2 = _psep(P, i, j, pp, periodic)
-                d2 = r0 * r0 + r1 * r1 + r2 * r2
-                if d2 >= R2 or d2 == 0.0 or mj == 0.0:
-                    continue
-                F = _F(np.sqrt(d2), R, fac2, kkind)
-                rj = P[j, _RHO]
-                fj = P[j, _ISF]
-                # pressure, eq. 2.85: -m_j (p_i/rho_i^2 + p_j/rho_j^2) grad_i W
-                cp = -mj * (pri + P[j, _PR]) * F
-                # viscosity, eq. 2.86 (a wall neighbour takes the fluid's mu, ghost velocity)
-                muj = fj * P[j, _MU] + (1.0 - fj) * mui
-                rs = ri + rj
-                ie = 1.0 / (d2 + eps2)
-                cv = mj * 4.0 * (mui + muj) / (rs * rs) * F * d2 * ie
-                u0 = P[j, _VG] - vi0
-                u1 = P[j, _VG + 1] - vi1
-                u2 = P[j, _VG + 2] - vi2
-                if use_art:
-                    cp += 2.0 * mj * art_coef / rs * F * (u0 * r0 + u1 * r1 + u2 * r2) * ie
-                a0 += cp * r0 + cv * u0
-                a1 += cp * r1 + cv * u1
-                a2 += cp * r2 + cv * u2
-                # continuity, eq. 2.87: rho_i sum V_j (v_i - v_j) . grad_i W (wall: its own v)
-                VF = P[j, _VOL] * F
-                cont -= VF * ((P[j, _V] - vi0) * r0 + (P[j, _V + 1] - vi1) * r1
-                              + (P[j, _V + 2] - vi2) * r2)
-                if use_delta:  # eqs. 2.88-2.89, fluid-fluid pairs
-                    gs = ((gi0 + P[j, _G]) * r0 + (gi1 + P[j, _G + 1]) * r1
-                          + (gi2 + P[j, _G + 2]) * r2)
-                    diff += fj * ((rj - ri) - 0.5 * gs) * VF
+            if fast == 3:
+                a0, a1, a2, cont, diff = _fluid_row_sums(
+                    P, i, row, R2, R, fac2, WENDLAND_C2, 3, pp, False, eps2, art_coef)
+            elif fast == 2:
+                a0, a1, a2, cont, diff = _fluid_row_sums(
+                    P, i, row, R2, R, fac2, WENDLAND_C2, 2, pp, False, eps2, art_coef)
+            else:
+                a0, a1, a2, cont, diff = _fluid_row_sums(
+                    P, i, row, R2, R, fac2, kkind, 3, pp, periodic, eps2, art_coef)
             acc[i, 0] = a0 + gravity[0]
             if dim > 1:
                 acc[i, 1] = a1 + gravity[1]
             if dim > 2:
                 acc[i, 2] = a2 + gravity[2]
-            drho[i] = ri * cont + delta_coef * 2.0 * diff
+            drho[i] = P[i, _RHO] * cont + (delta_coef * 2.0 * diff if use_delta else 0.0)
             for k in range(dim):
                 f_wall[i, k] = 0.0
         else:  # wall row: the same pair terms with i and j swapped (rows hold fluid only)
-            wi0 = P[i, _VG]
-            wi1 = P[i, _VG + 1]
-            wi2 = P[i, _VG + 2]
-            for jj in range(offsets[i], offsets[i] + cnt[i]):
-                j = indices[jj]
-                if P[j, _ISF] == 0.0:
-                    continue
-                mj = P[j, _M]
-                r0, r1, r2 = _psep(P, i, j, pp, periodic)
-                d2 = r0 * r0 + r1 * r1 + r2 * r2
-                if d2 >= R2 or d2 == 0.0:
-                    continue
-                F = _F(np.sqrt(d2), R, fac2, kkind)
-                rs = ri + P[j, _RHO]
-                cp = -mj * (pri + P[j, _PR]) * F
-                ie = 1.0 / (d2 + eps2)
-                cv = mj * 8.0 * P[j, _MU] / (rs * rs) * F * d2 * ie
-                u0 = P[j, _V] - wi0
-                u1 = P[j, _V + 1] - wi1
-                u2 = P[j, _V + 2] - wi2
-                if use_art:
-                    cp += 2.0 * mj * art_coef / rs * F * (u0 * r0 + u1 * r1 + u2 * r2) * ie
-                a0 += cp * r0 + cv * u0
-                a1 += cp * r1 + cv * u1
-                a2 += cp * r2 + cv * u2
+            if fast == 3:
+                a0, a1, a2 = _wall_row_sums(
+                    P, i, row, R2, R, fac2, WENDLAND_C2, 3, pp, False, eps2, art_coef)
+            elif fast == 2:
+                a0, a1, a2 = _wall_row_sums(
+                    P, i, row, R2, R, fac2, WENDLAND_C2, 2, pp, False, eps2, art_coef)
+            else:
+                a0, a1, a2 = _wall_row_sums(
+                    P, i, row, R2, R, fac2, kkind, 3, pp, periodic, eps2, art_coef)
             mi = P[i, _M]
             f_wall[i, 0] = mi * a0
             if dim > 1:
