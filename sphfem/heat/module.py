@@ -4,10 +4,29 @@ On ``init`` it reads c and k per material, places ghost particles for the scene'
 boundaries (algorithm 2.5) and appends them to the particle set as kind GHOST (the
 neighbour list is rebuilt once), builds the conduction system and its stepper: explicit
 Heun at ``cfl`` times the stable step, or the theta method at ``dt`` or
-``implicit_dt_factor`` times it.  The pair conductances are computed once; if another
-module moves particles they are recomputed from the current neighbour list every step
-(ghosts keep their places).  ``diagnostics`` reports the explicit limit, the fallbacks of
-the corrected operator, the ghost counts and the energy ledger (drift and balance).
+``implicit_dt_factor`` times it.  ``diagnostics`` reports the explicit limit, the
+fallbacks of the corrected operator, the ghost counts and the energy ledger (drift and
+balance).
+
+Moving particles (another module has ``moves_particles``, ``sim.moving``): the driver keeps
+a Verlet-skin list (pairs within (1 + skin) R, rebuilt only when a particle moved more
+than skin R / 2), so conductances computed once per list would use stale distances
+(pairs that came within R after the build would exchange no heat, pairs that separated
+would keep theirs).  Therefore every step the system is rebuilt when the list changed and
+otherwise refreshed from the current positions and volumes
+(:meth:`~sphfem.heat.system.HeatSystem.refresh`: one numba pass for the Cleary form, the
+corrected form's renormalisation and limiter per particle for ``fatehi_manzari``) along
+with the explicit limit (an O(pairs) Gershgorin pass).  What stays as built until the
+next neighbour rebuild: the ghosts (they do not move; their places, sources and mirror
+ratios), the free-surface plain rows of the corrected form
+(:func:`~sphfem.heat.problem.free_surface_rows`) and the particle set.  The explicit
+limit the driver sees is that of the last refresh (the positions at the end of the
+previous step); the step's own positions may allow a slightly smaller one
+(``dt_over_fresh_limit_max`` in ``diagnostics``: the largest dt over cfl x the limit of
+the positions the step used).  The implicit theta method reassembles and refactorises its
+matrix every step in a moving scene (one sparse LU per step, ``factorisations``): correct
+but costly; where the mover's step is far below the thermal limit (fluids) use
+``heat.time_integration = "explicit"``.
 """
 
 from __future__ import annotations
@@ -65,6 +84,8 @@ class HeatConduction(PhysicsModule):
             sim.update_neighbors()
         self.ghosts = gh
         self.faces = faces
+        self.refreshes = 0
+        self.dt_over_limit = 0.0
         self._ghost_index = np.arange(n, n + gh.n)
         self._ghost_source = gh.source.copy()
         self._build(sim)
@@ -99,11 +120,28 @@ class HeatConduction(PhysicsModule):
                                  plain_rows=plain, ghost_ratio=gh.ratio,
                                  limiter=prm.positivity_limiter)
         self.system.apply_ghosts(ps.T)
+        old = getattr(self, "stepper", None)
         if prm.time_integration == "explicit":
             self.stepper = ExplicitStepper(self.system)
         else:
             self.stepper = ThetaStepper(self.system, prm.theta, prm.startup)
+            if isinstance(old, ThetaStepper):  # a rebuild: Rannacher start-up only once
+                self.stepper.steps = old.steps
+                self.stepper.factorisations = old.factorisations
         self._nbrs = sim.nbrs
+        self.builds = getattr(self, "builds", 0) + 1
+        self.dt_min_explicit = min(getattr(self, "dt_min_explicit", np.inf),
+                                   self.system.stable_dt())
+
+    def _refresh(self, sim) -> None:
+        """Conductances, boundary conductances and explicit limit from the current
+        positions and volumes on the unchanged neighbour list (moving particles)."""
+        ps = sim.particles
+        self.system.refresh(sim.kernel_args, ps.m * ps.c_heat / ps.vol)
+        if self.params.time_integration != "explicit":
+            self.stepper.refresh()
+        self.refreshes += 1
+        self.dt_min_explicit = min(self.dt_min_explicit, self.system.stable_dt())
 
     # -- stepping ------------------------------------------------------------------------
     def dt_limits(self, sim) -> dict[str, float]:
@@ -118,8 +156,13 @@ class HeatConduction(PhysicsModule):
         return {}
 
     def step(self, sim, dt: float) -> None:
-        if sim.nbrs is not self._nbrs:  # particles moved: conductances from the new list
+        if sim.nbrs is not self._nbrs:  # a new list (or a re-sort): build on it
             self._build(sim)
+        elif sim.moving:  # same list, moved particles: conductances from the positions
+            self._refresh(sim)
+        if sim.moving and self.params.time_integration == "explicit":
+            lim = self.params.cfl * self.system.stable_dt()
+            self.dt_over_limit = max(self.dt_over_limit, dt / lim)
         ps = sim.particles
         heat = self.stepper.step(ps.T, dt)
         self.ledger.record(self.system.energy(ps.T, ps.m, ps.c_heat), heat)
@@ -169,6 +212,12 @@ class HeatConduction(PhysicsModule):
             "fallbacks": s.fallbacks,
             "limited_rows": s.limited,
             "free_surface_plain_rows": int(s.plain_rows.sum()),
+            "system_builds": self.builds,
+            "conductance_refreshes": self.refreshes,
+            "explicit_stable_dt_min_s": self.dt_min_explicit,
+            "dt_over_fresh_limit_max": (self.dt_over_limit if sim.moving and
+                                        self.params.time_integration == "explicit" else None),
+            "factorisations": getattr(self.stepper, "factorisations", None),
             "ghosts": dict(self.ghosts.stats),
             "T_range_K": list(self.T_range),
             "T_bounds_K": list(self.bounds),

@@ -7,7 +7,8 @@ Keys and units (the future ``[heat]`` section uses the same names):
                        "fatehi_manzari" (corrected, exact for quadratics; per-particle
                        fallback to the plain form where singular).
 ``time_integration``   "explicit" (Heun, dt from the thermal limit) or "implicit"
-                       (theta method, sparse LU factorised once).
+                       (theta method, sparse LU factorised once; every step when
+                       another module moves the particles).
 ``theta``              implicit weight: 1 backward Euler, 0.5 Crank-Nicolson.
 ``implicit_dt_factor`` implicit step as a multiple of the explicit stable step [-].
 ``dt``                 fixed heat step [s] (overrides ``implicit_dt_factor``).

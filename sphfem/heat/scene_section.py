@@ -37,7 +37,8 @@ HEAT = Section("heat", (
               "fatehi_manzari: corrected, exact for quadratics, plain fallback where singular"),
     Param("time_integration", str, "explicit", choices=("explicit", "implicit"),
           doc="explicit Heun at the thermal limit, or the implicit theta method "
-              "(sparse LU, factorised once)"),
+              "(sparse LU, factorised once; every step when another module moves the "
+              "particles, whose conductances are then refreshed every step)"),
     Param("theta", float, 1.0, bounds=(0.5, 1.0),
           doc="implicit weight: 1 backward Euler, 0.5 Crank-Nicolson"),
     Param("implicit_dt_factor", float, None, positive=True,

@@ -7,7 +7,9 @@
 * :class:`ThetaStepper` -- (I - theta dt A) T^{n+1} = (I + (1 - theta) dt A) T^n + dt f;
   theta = 1 backward Euler (L-stable), theta = 1/2 Crank-Nicolson (A-stable, second
   order).  The matrix is assembled once from the pair conductances and factorised once
-  with SuperLU (``scipy.sparse.linalg.splu``) while the geometry and dt stay fixed.
+  with SuperLU (``scipy.sparse.linalg.splu``) while the geometry and dt stay fixed; when
+  another module moves the particles the conductances change every step, and the heat
+  module then reassembles and refactorises every step (:meth:`ThetaStepper.refresh`).
   Crank-Nicolson does not damp stiff modes (amplification -> -1), so rough initial data
   (a wall suddenly heated) would ring; ``startup`` Crank-Nicolson steps are replaced by two
   backward-Euler half steps each (Rannacher 1984 time stepping).
@@ -117,14 +119,13 @@ class ExplicitStepper:
 
     def __init__(self, system):
         self.system = system
-        self._inv_rc = 1.0 / system.rho_c
 
     def step(self, T: np.ndarray, dt: float) -> float:
         """Advance the full temperature array ``T`` in place by ``dt``; return the heat the
         boundaries supplied during the step [J] (for :class:`~sphfem.heat.energy.EnergyLedger`).
         """
         s = self.system
-        return heun_step(T, dt, s.g, s.offsets, s.indices, self._inv_rc, s.active, s.vol,
+        return heun_step(T, dt, s.g, s.offsets, s.indices, s.inv_rc, s.active, s.vol,
                          s.g_outside, s.ghost_index, s.ghost_type, s.ghost_source,
                          s.ghost_t_wall, s.ghost_ratio, s.dirichlet_mode == "antisymmetric")
 
@@ -138,10 +139,19 @@ class ThetaStepper:
         self.system = system
         self.theta = theta
         self.startup = startup if theta < 1.0 else 0
+        self._T_held = T_held
         self.A, self.f = system.matrix(T_held)
         self._lu = {}
         self.steps = 0
         self.factorisations = 0
+
+    def refresh(self) -> None:
+        """Reassemble A and f from the system's current conductances (after
+        :meth:`HeatSystem.refresh`) and drop the factorisations: the next step factorises
+        anew.  Moving particles change A every step, so a moving scene pays one sparse LU
+        per step (``factorisations`` counts them)."""
+        self.A, self.f = self.system.matrix(self._T_held)
+        self._lu = {}
 
     def _factor(self, theta: float, dt: float):
         key = (theta, dt)

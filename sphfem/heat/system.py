@@ -25,12 +25,17 @@ import numpy as np
 import scipy.sparse as sp
 
 from sphfem import operators as op
-from sphfem.heat.conduction import pair_conductances
+from sphfem.heat.conduction import (
+    LAPLACIANS,
+    cleary_refresh,
+    gershgorin_rows,
+    pair_conductances,
+)
 from sphfem.heat.ghosts import DIRICHLET, INSULATED
 
 
 class HeatSystem:
-    """Conductances and ghost rules for a particle set that does not move.
+    """Conductances and ghost rules for a particle set (moving particles: :meth:`refresh`).
 
     ``kernel_args`` is the operators' common tail (x, vol, offsets, indices, R, sigma,
     kind, period) over the full set (ghosts included); ``rho_c`` [J/(m^3 K)] and ``k``
@@ -68,18 +73,91 @@ class HeatSystem:
             raise ValueError("every ghost source must be an active particle")
         self.plain_rows = (np.zeros(self.n, bool) if plain_rows is None
                            else np.asarray(plain_rows, bool) & self.active)
-        self.g, ok, self.beta = pair_conductances(
-            self.k, *kernel_args, laplacian=laplacian, plain_rows=self.plain_rows,
-            limiter_rows=self.active if limiter else None)
-        self.ok = ok
+        self.limiter = limiter
+        self.inv_rc = 1.0 / self.rho_c
+        self._inactive = np.flatnonzero(~self.active)
+        # ghost rules on active temperatures, per particle, for the Gershgorin pass: the
+        # column (source) and coefficient of each ghost's row of E (-1: no such entry)
+        self._rule_src = np.full(self.n, -1, np.int64)
+        self._rule_coef = np.zeros(self.n)
+        s_ = self.ghost_type == INSULATED
+        self._rule_src[self.ghost_index[s_]] = self.ghost_source[s_]
+        self._rule_coef[self.ghost_index[s_]] = 1.0
+        if dirichlet_mode == "antisymmetric":
+            d_ = self.ghost_type == DIRICHLET
+            self._rule_src[self.ghost_index[d_]] = self.ghost_source[d_]
+            self._rule_coef[self.ghost_index[d_]] = -self.ghost_ratio[d_]
+        if laplacian not in LAPLACIANS:
+            raise ValueError(f"unknown laplacian {laplacian!r}; expected one of {LAPLACIANS}")
+        self.g = np.empty(indices.shape[0])
+        # conductances to non-active neighbours (ghosts, held particles): boundary heat
+        self.g_outside = np.empty_like(self.g)
+        self._rows = np.zeros(self.n)  # Gershgorin sum per particle (0 where not active)
+        self._conductances()
+        #: conductance refreshes from moved positions since the build (:meth:`refresh`)
+        self.refreshes = 0
+
+    def _conductances(self) -> None:
+        """g, g_outside, the corrected form's masks and the explicit limit from
+        ``kernel_args`` (the Cleary form in one pass, :func:`cleary_refresh`)."""
+        args = self.kernel_args
+        offsets, indices = args[2], args[3]
+        if self.laplacian == "cleary":
+            cleary_refresh(self.k, *args, self.inv_rc, self.active, self._rule_src,
+                           self._rule_coef, self.g, self.g_outside, self._rows)
+            if not hasattr(self, "ok"):
+                self._set_corrections(np.ones(self.n, bool), np.zeros(self.n))
+        else:
+            g, ok, beta = pair_conductances(
+                self.k, *args, laplacian=self.laplacian, plain_rows=self.plain_rows,
+                limiter_rows=self.active if self.limiter else None)
+            self.g = np.ascontiguousarray(g)
+            self._set_corrections(ok, beta)
+            self._rows = gershgorin_rows(self.g, offsets, indices, self.inv_rc, self.active,
+                                         self._rule_src, self._rule_coef, self.g_outside)
+        smax = float(self._rows.max()) if self.n else 0.0
+        self._stable_dt = self._dt_of(smax)
+        self._vol_active = np.ascontiguousarray(self.vol[self.active])
+
+    def _set_corrections(self, ok, beta) -> None:
+        self.ok, self.beta = ok, beta
         #: rows of the corrected form blended towards the plain one by the positivity limiter
-        self.limited = int(np.count_nonzero(self.beta[self.active] > 0))
+        self.limited = int(np.count_nonzero(beta[self.active] > 0))
         # fallbacks counted over active particles only (ghosts' rows are never used)
         self.fallbacks = int((~ok[self.active]).sum())
-        # conductances to non-active neighbours (ghosts, held particles): boundary heat
-        self.g_outside = np.where(self.active[indices], 0.0, self.g)
-        self._vol_active = np.ascontiguousarray(vol[self.active])
-        self._inactive = np.flatnonzero(~self.active)
+
+    def _dt_of(self, smax: float) -> float:
+        if self.active_index.size == 0:
+            return np.inf
+        return 2.0 / smax if smax > 0 else np.inf
+
+    # -- moving particles ----------------------------------------------------------------
+    def refresh(self, kernel_args, rho_c=None) -> None:
+        """Recompute the conductances, the boundary conductances and the explicit limit
+        from the current positions (and volumes) in ``kernel_args``, on the same neighbour
+        list (a Verlet-skin list: pairs beyond R get g = 0 because dW/dr vanishes there).
+
+        For particles that another module moves; the set, the list, the ghost rules and
+        the ghosts' places are those of the build.  The Cleary form is one numba pass over
+        the pairs (conductance, boundary conductance and Gershgorin row in the same loop);
+        the corrected form recomputes its renormalisation and limiter per particle, then
+        one more pass for the bound.  The free-surface plain rows of the corrected form
+        (``plain_rows``) stay those of the build (a particle set by the driver's next
+        neighbour rebuild).  ``rho_c`` (per particle, m c / V with the current V) keeps
+        m c dT/dt = V sum_j g_ij (T_j - T_i), hence the Cleary energy balance, exact when
+        the volumes change.
+        """
+        x, vol, offsets, indices = kernel_args[:4]
+        if offsets.shape[0] != self.n + 1 or indices.shape[0] != self.g.shape[0]:
+            raise ValueError("HeatSystem.refresh: the neighbour list changed; rebuild the "
+                             "system instead")
+        self.kernel_args = kernel_args
+        self.offsets, self.indices, self.vol = offsets, indices, vol
+        if rho_c is not None:
+            self.rho_c = np.ascontiguousarray(rho_c, dtype=np.float64)
+            self.inv_rc = 1.0 / self.rho_c
+        self._conductances()
+        self.refreshes += 1
 
     # -- ghosts --------------------------------------------------------------------------
     def apply_ghosts(self, T: np.ndarray) -> None:
@@ -146,16 +224,23 @@ class HeatSystem:
         source's column).  Interior rows give 1 / (sum_j g_ij / (rho c)_i), i.e.
         dt = C rho c dx^2 / k on a lattice; ``diagnostics`` reports C.
 
-        The conductances of a system never change, so the bound is computed once and cached
-        (the driver asks for it every step).
+        Computed with the conductances (at the build and at every :meth:`refresh`) by an
+        O(pairs) numba pass over the pair weights, without assembling A (the Cleary form:
+        in the conductance pass itself, :func:`~sphfem.heat.conduction.cleary_refresh`;
+        the corrected form: :func:`~sphfem.heat.conduction.gershgorin_rows`); it equals
+        the assembled matrix's value (:meth:`_gershgorin_dt`) to round-off (4e-16
+        measured, ``tests/test_heat.py``).
         """
-        cached = self.__dict__.get("_stable_dt")
-        if cached is not None:
-            return cached
-        self._stable_dt = self._gershgorin_dt()
         return self._stable_dt
 
+    def gershgorin_rows(self) -> np.ndarray:
+        """|A_ii| + sum_{j != i} |A_ij| of every active row of eq. (2), from the pair pass
+        of the last build or refresh (the rows whose maximum :meth:`stable_dt` uses)."""
+        return self._rows[self.active_index].copy()
+
     def _gershgorin_dt(self) -> float:
+        """The bound of :meth:`stable_dt` from the assembled sparse A of :meth:`matrix`
+        (the reference for the pair pass; O(pairs) too, but with scipy's assembly cost)."""
         if self.active_index.size == 0:
             return np.inf
         A, _ = self.matrix()
