@@ -25,10 +25,15 @@ and reports
   moves skin R / 2 in about 4 steps at the acoustic CFL);
 * ``search_share = build_s / (rebuild_every step_s + build_s)`` and ``search_share_every_step``;
 * ``cpu_*``: the same from the minimum process CPU time (all threads; on a shared machine the
-  stable figure on 1 thread).
+  stable figure on 1 thread);
+* ``pass_cpu_ms``: process CPU time of each kernel of a force evaluation called alone with
+  the solver's arrays (minimum over repeats): prepare (EOS + packing of per-particle data),
+  Adami wall state, density-gradient pass (with the row compaction), force pass, and
+  ``compact_rows`` (the compaction alone, run instead of the density-gradient pass when
+  delta = 0).
 
-Run ``python -m sphfem.fluid.bench [CASE] [--quick] [--json FILE]`` or
-``sphfem bench dambreak2d | droplet3d [--quick]``.
+Run ``python -m sphfem.fluid.bench [CASE] [--quick] [--sizes N ...] [--threads T ...]
+[--json FILE]`` or ``sphfem bench dambreak2d | droplet3d [--quick]``.
 """
 
 from __future__ import annotations
@@ -40,6 +45,7 @@ import time
 import numba
 import numpy as np
 
+from sphfem.fluid import passes
 from sphfem.fluid.setup import (
     box_walls,
     droplet_packing,
@@ -47,6 +53,7 @@ from sphfem.fluid.setup import (
     lattice,
     make_particles,
 )
+from sphfem.fluid.walls_adami2012 import adami_wall_state
 from sphfem.fluid.wcsph import FluidParams, FluidSolver
 from sphfem.particles import FLUID
 
@@ -119,6 +126,44 @@ def _min_time(fn, repeats):
     return best, best_cpu
 
 
+def pass_profile(s: FluidSolver, repeats: int = 5) -> dict:
+    """Process CPU time [ms] of each kernel of a force evaluation of ``s``, each called alone
+    as :meth:`FluidSolver.evaluate` calls it (minimum over ``repeats``; the state is left
+    unchanged: every kernel recomputes its outputs from the same inputs)."""
+    p, sc, pa, nl = s.p, s._scratch, s.params, s.nbrs
+    g = s.gravity
+    nb = np.empty_like(nl.indices)
+    cnt = np.zeros(p.n, dtype=np.int64)
+    delta_coef = pa.delta * s.h * pa.c0
+
+    def prepare():
+        passes.prepare_fluid(p.rho, p.m, p.v, p.kind, pa.rho0, s.B, pa.gamma, p.p, sc.vg)
+        passes.prepare_all(p.rho, p.p, p.m, p.vol, p.kind, sc.pr, sc.V, sc.meff, sc.isf)
+        passes.pack_rows(p.x, p.v, sc.vg, p.rho, sc.pr, sc.V, sc.meff, sc.isf, p.mu, sc.grad,
+                         sc.P)
+
+    kernels = {
+        "prepare": prepare,
+        "adami_wall_state": lambda: adami_wall_state(
+            p.x, p.v, p.rho, p.p, p.acc, p.kind, nl.offsets, nl.indices, s.R, s.kkind,
+            s.period, g, pa.rho0, s.B, pa.gamma, sc.vg),
+        "density_gradient": lambda: passes.density_gradient(
+            p.x, p.rho, sc.V, p.kind, nl.offsets, nl.indices, s.R, s.sigma, s.kkind,
+            s.period, pa.cond_max, sc.grad, sc.ok, nb, cnt),
+        "fluid_forces": lambda: passes.fluid_forces(
+            sc.P, p.kind, nl.offsets, cnt, nb, s.R, s.sigma, s.kkind, s.period, g,
+            pa.eps_visc * s.h * s.h, delta_coef, pa.alpha * s.h * pa.c0, p.acc, p.drho,
+            p.f_fluid),
+        "compact_rows": lambda: passes.compact_rows(p.x, p.kind, nl.offsets, nl.indices,
+                                                    s.R, s.period, nb, cnt),
+    }
+    out = {}
+    for name, fn in kernels.items():
+        out[name] = round(_min_time(fn, repeats)[1] * 1e3, 3)
+    s.evaluate()  # leave the solver's state exactly as an evaluation does
+    return out
+
+
 def bench_one(n_fluid: int, threads: int, repeats: int = 5, case: str = "dambreak3d") -> dict:
     numba.set_num_threads(threads)
     s = CASES[case][0](n_fluid)
@@ -133,6 +178,7 @@ def bench_one(n_fluid: int, threads: int, repeats: int = 5, case: str = "dambrea
         s.check()
 
     step_s, cpu_step_s = _min_time(one_step, repeats)
+    parts = pass_profile(s, repeats)
     s.params.skin = FluidParams.skin
     s.params.sort_every = 0
     build_s, cpu_build_s = _min_time(s.rebuild_neighbors, max(2, repeats // 2))
@@ -156,6 +202,7 @@ def bench_one(n_fluid: int, threads: int, repeats: int = 5, case: str = "dambrea
         "cpu_particle_steps_per_s_with_search": n / (cpu_step_s + cpu_build_s / REBUILD_EVERY),
         "cpu_search_share": cpu_build_s / (REBUILD_EVERY * cpu_step_s + cpu_build_s),
         "wall_s_split": {k: round(v, 4) for k, v in s.wall.items()},
+        "pass_cpu_ms": parts,
     }
 
 
@@ -206,7 +253,9 @@ def run_fluid_bench(quick: bool = False, case: str = "dambreak3d", sizes=None,
                       f"{r['cpu_build_s'] * 1e3:8.2f} ms, pairs/s {r['cpu_pairs_per_s']:.3e}, "
                       f"particle-steps/s {r['cpu_particle_steps_per_s']:.3e} (with search "
                       f"{r['cpu_particle_steps_per_s_with_search']:.3e}), search share "
-                      f"{r['cpu_search_share']:.1%}", flush=True)
+                      f"{r['cpu_search_share']:.1%}\n"
+                      f"  passes (cpu ms): " + ", ".join(
+                          f"{k} {v:.2f}" for k, v in r["pass_cpu_ms"].items()), flush=True)
     finally:
         numba.set_num_threads(old)
     out["machine"]["load_average_end"] = machine_info()["load_average"]
@@ -217,9 +266,11 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("case", nargs="?", default="dambreak3d", choices=tuple(CASES))
     ap.add_argument("--quick", action="store_true")
+    ap.add_argument("--sizes", type=int, nargs="+", help="fluid particle counts")
+    ap.add_argument("--threads", type=int, nargs="+", default=[1, 2])
     ap.add_argument("--json")
     args = ap.parse_args(argv)
-    res = run_fluid_bench(args.quick, args.case)
+    res = run_fluid_bench(args.quick, args.case, sizes=args.sizes, threads=args.threads)
     if args.json:
         with open(args.json, "w") as f:
             json.dump(res, f, indent=2, default=float)
