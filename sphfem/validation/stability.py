@@ -87,13 +87,14 @@ ALUMINA = {"rho0": 3950.0, "c": 900.0, "k": 10.0, "E": 300.0e9, "nu": 0.21, "alp
 def droplet_scene(quick: bool, *, speed: float = 50.0, c0: float | None = None,
                   T_drop: float = 373.15, T_sub: float = 293.15, mu_factor: float = 1.0,
                   modules=("fluid", "heat", "coupling"), t_tc: float = 1.0, jitter: float = 0.0,
-                  laplacian: str = "cleary", E: float = 300.0e9) -> dict:
+                  laplacian: str = "cleary", E: float = 300.0e9, dx: float | None = None
+                  ) -> dict:
     """A water droplet (D = 0.1 mm) hitting an alumina-like substrate block (wall particles,
     coupled to an FEM substrate when ``coupling`` is listed).  2D at dx = 5 um (quick) or 3D
     at dx = 6.25 um; runs ``t_tc`` contact times D / speed (at rest: 0.4 ms, some 200
     explicit thermal steps)."""
     dim = 2 if quick else 3
-    dx = 5.0e-6 if quick else 6.25e-6
+    dx = dx or (5.0e-6 if quick else 6.25e-6)
     D = 1.0e-4
     half = 0.2e-3
     water = dict(WATER, mu=WATER["mu"] * mu_factor, c0=c0 if c0 else max(10.0 * speed, 500.0))
@@ -134,8 +135,9 @@ def droplet_scene(quick: bool, *, speed: float = 50.0, c0: float | None = None,
 
 def tlsph_substrate_scene(quick: bool) -> dict:
     """:func:`droplet_scene` with the TL-SPH substrate backend (0.3 mm wide, 60 um deep
-    box of solid particles relaxed quasi-statically every 60 SPH steps)."""
-    d = droplet_scene(quick)
+    box of solid particles relaxed quasi-statically every 60 SPH steps); full: 3D at
+    dx = 10 um (the relaxation of a finer 3D box takes tens of minutes)."""
+    d = droplet_scene(quick, dx=None if quick else 10.0e-6)
     dim = d["scene"]["dim"]
     c = d["coupling"]
     c.update(backend="tlsph", every_k_steps=60)
