@@ -296,8 +296,9 @@ def _max_candidates(cell_start, ncell, reach, period):
 
 
 @njit(cache=True, inline="always")
-def _gather_run(xs, order, ps, pe, sh0, sh1, sh2, bbox, r2max, cx, cj, m):
-    """Append the particles ``ps:pe`` (shifted by the image) within ``radius`` of the box."""
+def _gather_run(xs, order, kb, um, ps, pe, sh0, sh1, sh2, bbox, r2max, cx, cj, cb, m):
+    """Append the particles ``ps:pe`` (shifted by the image) within ``radius`` of the box
+    whose kind bit ``kb`` is in the mask ``um``."""
     x0 = xs[0]
     x1 = xs[1]
     x2 = xs[2]
@@ -314,15 +315,53 @@ def _gather_run(xs, order, ps, pe, sh0, sh1, sh2, bbox, r2max, cx, cj, m):
         cx[1, q] = y1
         cx[2, q] = y2
         cj[q] = order[p]
-        m += d0 * d0 + d1 * d1 + d2 * d2 <= r2max
+        cb[q] = kb[p]
+        m += (d0 * d0 + d1 * d1 + d2 * d2 <= r2max) & ((kb[p] & um) != 0)
     return m
 
 
 @njit(cache=True, inline="always")
-def _gather_candidates(c, xs, order, cell_start, ncell, reach, period, r2max, cx, cj):
-    """Gather the candidates of cell ``c`` into ``cx`` (positions, periodic image shift
-    applied) and ``cj`` (ids).  Returns their number, the index of the cell's own first
-    particle among them (its particles follow contiguously), and whether ``cj`` ascends."""
+def _sort_candidates(cx, cj, cb, m):
+    """Insertion sort of the candidates by id (``cx``, ``cb`` moved along), given up after
+    a budget of moves proportional to ``m``.  Returns whether ``cj[:m]`` strictly ascends
+    (every particle's neighbours then come out sorted)."""
+    budget = 4 * m + 64
+    for q in range(1, m):
+        v = cj[q]
+        if v > cj[q - 1]:
+            continue
+        y0 = cx[0, q]
+        y1 = cx[1, q]
+        y2 = cx[2, q]
+        b = cb[q]
+        r = q
+        while r > 0 and cj[r - 1] > v:
+            cj[r] = cj[r - 1]
+            cx[0, r] = cx[0, r - 1]
+            cx[1, r] = cx[1, r - 1]
+            cx[2, r] = cx[2, r - 1]
+            cb[r] = cb[r - 1]
+            r -= 1
+        cj[r] = v
+        cx[0, r] = y0
+        cx[1, r] = y1
+        cx[2, r] = y2
+        cb[r] = b
+        budget -= q - r
+        if budget < 0:
+            return False
+    ascending = True
+    for q in range(1, m):
+        ascending &= cj[q] > cj[q - 1]
+    return ascending
+
+
+@njit(cache=True, inline="always")
+def _gather_candidates(c, xs, order, kb, um, cell_start, ncell, reach, period, r2max, cx, cj,
+                       cb):
+    """Gather the candidates of cell ``c`` (those whose kind bit is in ``um``) into ``cx``
+    (positions, periodic image shift applied), ``cj`` (ids) and ``cb`` (kind bits), sorted
+    by id when that is cheap.  Returns their number and whether ``cj`` ascends."""
     x0 = xs[0]
     x1 = xs[1]
     x2 = xs[2]
@@ -339,8 +378,6 @@ def _gather_candidates(c, xs, order, cell_start, ncell, reach, period, r2max, cx
         lo2 = min(lo2, x2[p])
         hi2 = max(hi2, x2[p])
     bbox = (lo0, hi0, lo1, hi1, lo2, hi2)
-    p0u = np.uint64(p0)
-    q_own = 0
     c0, c1, c2 = _cell_xyz(c, ncell)
     A = _axis_parts(c0, reach[0], ncell[0], period[0])
     B = _axis_parts(c1, reach[1], ncell[1], period[1])
@@ -360,28 +397,10 @@ def _gather_candidates(c, xs, order, cell_start, ncell, reach, period, r2max, cx
                             run = min(E[2 * ie + 1] - e, ncell[2] - 1 - ee)
                             ps = np.uint64(cell_start[row + ee])
                             pe = np.uint64(cell_start[row + ee + run + 1])
-                            own = (
-                                aa == c0
-                                and bb == c1
-                                and ee <= c2 <= ee + run
-                                and sh0 == 0.0
-                                and sh1 == 0.0
-                                and sh2 == 0.0
-                            )
-                            if own:  # the cell itself: all kept, remember where it starts
-                                m = _gather_run(
-                                    xs, order, ps, p0u, sh0, sh1, sh2, bbox, r2max, cx, cj, m
-                                )
-                                q_own = m
-                                ps = p0u
-                            m = _gather_run(
-                                xs, order, ps, pe, sh0, sh1, sh2, bbox, r2max, cx, cj, m
-                            )
+                            m = _gather_run(xs, order, kb, um, ps, pe, sh0, sh1, sh2, bbox,
+                                            r2max, cx, cj, cb, m)
                             e += run + 1
-    ascending = True
-    for q in range(1, m):
-        ascending &= cj[q] > cj[q - 1]
-    return m, q_own, ascending
+    return m, _sort_candidates(cx, cj, cb, m)
 
 
 @njit(cache=True, inline="always")
@@ -427,19 +446,40 @@ def _kind_count(xi0, xi1, xi2, cx0, cx1, cx2, cb, rm, m, r2max):
     return k
 
 
+@njit(cache=True, inline="always")
+def _clear_self(hit, cj, m, i, ascending):
+    """Clear the hit of particle ``i`` itself (binary search when ``cj`` ascends; else every
+    occurrence: in a tiny periodic box its other images are candidates too, never hits)."""
+    if ascending:
+        a = 0
+        b = m
+        while a < b:
+            h = (a + b) >> 1
+            if cj[h] < i:
+                a = h + 1
+            else:
+                b = h
+        hit[a] = 0
+    else:
+        for q in range(m):
+            if cj[q] == i:
+                hit[q] = 0
+
+
 @njit(cache=True, parallel=True)
-def _cell_pass(xs, order, cell_start, ncell, reach, period, r2max, maxcand, offsets, out,
-               kind, keep):
+def _cell_pass(xs, order, kb, rmask, cell_start, ncell, reach, period, r2max, maxcand,
+               offsets, out):
     """Count (``out`` empty; returns counts, self excluded) or fill the CSR segments.
 
-    Each particle writes only its own segment (via a per-chunk scratch row: the branch-free
-    compaction stores one slot past the last hit), so the pass is race free, and the
-    result does not depend on the thread count.  With a non-empty ``kind``, row i keeps
-    only the neighbours j whose kind bit is set in ``keep[kind[i]]``.
+    ``kb`` (cell order) is the kind bit of every particle and ``rmask`` the kind bits its
+    row keeps (all ones and 0xFF without a pair filter).  A cell gathers only candidates
+    whose kind some of its particles keep; when all its particles keep the same kinds the
+    distance loops need no kind test.  Each particle writes only its own segment (via a
+    per-chunk scratch row: the branch-free compaction stores one slot past the last hit),
+    so the pass is race free, and the result does not depend on the thread count.
     """
     n = order.shape[0]
     fill = out.shape[0] > 0
-    use_kind = kind.shape[0] > 0
     ncells = cell_start.shape[0] - 1
     counts = np.zeros(n, dtype=np.int64)
     # chunks of consecutive cells holding about equal numbers of particles (empty regions
@@ -452,67 +492,72 @@ def _cell_pass(xs, order, cell_start, ncell, reach, period, r2max, maxcand, offs
     for t in prange(nchunk):
         cx = np.empty((3, maxcand + 1))
         cj = np.empty(maxcand + 8, dtype=np.int32)
+        cb = np.zeros(maxcand + 8, dtype=np.uint8)
         buf = np.empty(maxcand + 8 if fill else 0, dtype=np.int32)
         hit = np.zeros(maxcand + 8 if fill else 8, dtype=np.uint8)
         hit8 = hit[: 8 * (hit.shape[0] // 8)].view(np.uint64)
-        cb = np.zeros(maxcand + 8 if use_kind else 0, dtype=np.uint8)
         cx0 = cx[0]
         cx1 = cx[1]
         cx2 = cx[2]
         for c in range(bounds[t], bounds[t + 1]):
-            if cell_start[c + 1] == cell_start[c]:
+            p0 = cell_start[c]
+            p1 = cell_start[c + 1]
+            if p1 == p0:
                 continue
-            m, q_own, ascending = _gather_candidates(
-                c, xs, order, cell_start, ncell, reach, period, r2max, cx, cj
+            um = rmask[p0]  # kinds kept by some particle of the cell
+            uniform = True
+            for p in range(p0 + 1, p1):
+                uniform &= rmask[p] == um
+                um |= rmask[p]
+            if um == 0:
+                continue  # counts stay 0
+            m, ascending = _gather_candidates(
+                c, xs, order, kb, um, cell_start, ncell, reach, period, r2max, cx, cj, cb
             )
+            if m == 0:
+                continue
             if fill:
                 hit[m : m + 8] = 0  # padding of the last 8-candidate word
-            if use_kind:
-                for q in range(m):
-                    cb[q] = np.uint8(1) << kind[cj[q]]
-            for p in range(cell_start[c], cell_start[c + 1]):
+            for p in range(p0, p1):
                 i = order[p]
+                rm = rmask[p]
+                if rm == 0:
+                    continue
                 xi0 = xs[0, p]
                 xi1 = xs[1, p]
                 xi2 = xs[2, p]
-                k = 0
-                if use_kind:
-                    rm = keep[kind[i]]
-                    if rm == 0:
-                        counts[i] = 0
-                        continue
-                    if fill:
-                        _kind_hits(xi0, xi1, xi2, cx0, cx1, cx2, cb, rm, m, r2max, hit)
-                    else:
-                        k = _kind_count(xi0, xi1, xi2, cx0, cx1, cx2, cb, rm, m, r2max)
-                        k -= ((np.uint8(1) << kind[i]) & rm) != 0  # self
-                        counts[i] = k
-                        continue
-                elif fill:
-                    # vectorised hit mask, then a compaction that skips 8 misses at a time
-                    for q in range(np.uint64(m)):
-                        d0 = xi0 - cx0[q]
-                        d1 = xi1 - cx1[q]
-                        d2 = xi2 - cx2[q]
-                        hit[q] = d0 * d0 + d1 * d1 + d2 * d2 <= r2max
+                own = (kb[p] & rm) != 0  # itself among the kept candidates
                 if fill:
-                    hit[q_own + p - cell_start[c]] = 0  # self
+                    if uniform:
+                        for q in range(np.uint64(m)):
+                            d0 = xi0 - cx0[q]
+                            d1 = xi1 - cx1[q]
+                            d2 = xi2 - cx2[q]
+                            hit[q] = d0 * d0 + d1 * d1 + d2 * d2 <= r2max
+                    else:
+                        _kind_hits(xi0, xi1, xi2, cx0, cx1, cx2, cb, rm, m, r2max, hit)
+                    if own:
+                        _clear_self(hit, cj, m, i, ascending)
+                    # a compaction that skips 8 misses at a time
                     k = _compact(hit8, cj, m, buf)
                     base = np.uint64(offsets[i])
                     for q in range(np.uint64(k)):
                         out[base + q] = buf[q]
                     # a subsequence of ascending candidates ascends; otherwise (particles
-                    # not cell-sorted, or a tiny periodic box) sort the segment
+                    # far from cell-sorted, or a tiny periodic box) sort the segment
                     if not ascending:
                         out[base : base + np.uint64(k)].sort()
                 else:
-                    for q in range(np.uint64(m)):
-                        d0 = xi0 - cx0[q]
-                        d1 = xi1 - cx1[q]
-                        d2 = xi2 - cx2[q]
-                        k += d0 * d0 + d1 * d1 + d2 * d2 <= r2max
-                    k -= 1  # self, always a candidate at distance 0
-                counts[i] = k
+                    if uniform:
+                        k = 0
+                        for q in range(np.uint64(m)):
+                            d0 = xi0 - cx0[q]
+                            d1 = xi1 - cx1[q]
+                            d2 = xi2 - cx2[q]
+                            k += d0 * d0 + d1 * d1 + d2 * d2 <= r2max
+                    else:
+                        k = _kind_count(xi0, xi1, xi2, cx0, cx1, cx2, cb, rm, m, r2max)
+                    counts[i] = k - own
     return counts
 
 
@@ -577,15 +622,30 @@ def build_neighbor_list(
     order32 = order.astype(np.int32)
     r2max = radius * radius
     maxcand = _max_candidates(cell_start, g.ncell, g.reach, g.period)
-    args = (xs, order32, cell_start, g.ncell, g.reach, g.period, r2max, maxcand)
-    kinds, keeps = _pair_filter(kind, keep, n)
+    kb, rmask = _kind_bits(order, *_pair_filter(kind, keep, n))
+    args = (xs, order32, kb, rmask, cell_start, g.ncell, g.reach, g.period, r2max, maxcand)
     offsets = np.zeros(n + 1, dtype=np.int64)
-    counts = _cell_pass(*args, offsets, np.zeros(0, np.int32), kinds, keeps)
+    counts = _cell_pass(*args, offsets, np.zeros(0, np.int32))
     np.cumsum(counts, out=offsets[1:])
     indices = np.empty(int(offsets[-1]), dtype=np.int32)
     if indices.shape[0]:
-        _cell_pass(*args, offsets, indices, kinds, keeps)
+        _cell_pass(*args, offsets, indices)
     return NeighborList(offsets, indices, radius, period)
+
+
+@njit(cache=True)  # serial: memory bound
+def _kind_bits(order, kind, keep):
+    """Kind bit and kept-kinds mask of every particle in cell order (all ones / 0xFF
+    without a filter, ``kind`` empty)."""
+    n = order.shape[0]
+    kb = np.ones(n, dtype=np.uint8)
+    rmask = np.full(n, 0xFF, dtype=np.uint8)
+    if kind.shape[0]:
+        for p in range(n):
+            k = kind[order[p]]
+            kb[p] = np.uint8(1) << k
+            rmask[p] = keep[k]
+    return kb, rmask
 
 
 def _pair_filter(kind, keep, n):

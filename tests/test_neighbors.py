@@ -281,3 +281,79 @@ def test_kind_filter_matches_filter_rows(dim, periodic):
                                kind=kind, keep=[15] * 4)
     assert np.array_equal(allk.offsets, full.offsets)
     assert np.array_equal(allk.indices, full.indices)
+
+
+def reference_csr(x, radius, period, kind=None, keep=None):
+    """The exact list the search must return: cKDTree pairs, both directions, the pair
+    filter applied, every row ascending."""
+    pairs = np.array(sorted(reference_pairs(x, radius, period)), dtype=np.int64).reshape(-1, 2)
+    i = np.concatenate([pairs[:, 0], pairs[:, 1]])
+    j = np.concatenate([pairs[:, 1], pairs[:, 0]])
+    if kind is not None:
+        masks = np.zeros(8, np.int64)
+        masks[: len(keep)] = keep
+        sel = (masks[kind[i]] >> kind[j]) & 1 == 1
+        i, j = i[sel], j[sel]
+    o = np.lexsort((j, i))
+    offsets = np.zeros(x.shape[0] + 1, np.int64)
+    np.cumsum(np.bincount(i, minlength=x.shape[0]), out=offsets[1:])
+    return offsets, j[o].astype(np.int32)
+
+
+@pytest.mark.parametrize("dim,axes", [(2, ()), (2, (0,)), (3, ()), (3, (1,)), (3, (0, 2)),
+                                      (3, (0, 1, 2))])
+@pytest.mark.parametrize("order", ["sorted", "perturbed", "shuffled"])
+@pytest.mark.parametrize("filt", ["none", "view", "random"])
+def test_csr_identical_to_reference(dim, axes, order, filt):
+    """Same pairs in the same order whatever the particle order (cell-sorted, a few
+    particles out of place -- the candidates are sorted per cell -- or random) and filter."""
+    from sphfem.fluid.passes import VIEW_KEEP
+
+    rng = np.random.default_rng(100 * dim + 10 * len(axes) + len(order) + len(filt))
+    n = 2500 if dim == 3 else 1200
+    L = 10.0
+    radius = 1.3
+    period = np.array([L if k in axes else 0.0 for k in range(dim)])
+    x = rng.uniform(0.0, L, (n, dim))
+    lo, hi = np.zeros(dim), np.full(dim, L)
+    if order != "shuffled":
+        x = x[cell_sort_permutation(x, radius, lo, hi, period)]
+    if order == "perturbed":  # swap some particles with a nearby one in the sorted order
+        for a in rng.choice(n - 40, 60, replace=False):
+            b = a + rng.integers(1, 40)
+            x[[a, b]] = x[[b, a]]
+    kind = keep = None
+    if filt == "view":
+        kind, keep = rng.integers(0, 4, n).astype(np.int8), VIEW_KEEP
+    elif filt == "random":
+        kind = rng.integers(0, 5, n).astype(np.int8)
+        keep = [int(v) for v in rng.integers(0, 32, 5)]
+        keep[0] = 0  # rows of kind 0 are empty
+    nl = build_neighbor_list(x, radius, lo, hi, period, kind=kind, keep=keep)
+    off, idx = reference_csr(x, radius, period, kind, keep)
+    assert np.array_equal(nl.offsets, off)
+    assert np.array_equal(nl.indices, idx)
+
+
+def test_kind_filter_deterministic_across_threads():
+    from sphfem.fluid.passes import VIEW_KEEP
+
+    rng = np.random.default_rng(11)
+    x = rng.random((5000, 3))
+    lo, hi, period = np.zeros(3), np.ones(3), np.array([0.0, 1.0, 0.0])
+    x = x[cell_sort_permutation(x, 0.07, lo, hi, period)]
+    x[:2500] += rng.normal(0.0, 0.01, (2500, 3))  # drifted since the sort
+    kind = (x[:, 2] < 0.3).astype(np.int8)  # fluid above a wall layer
+    saved = numba.get_num_threads()
+    try:
+        out = []
+        for t in (1, numba.config.NUMBA_NUM_THREADS):
+            numba.set_num_threads(t)
+            out.append(build_neighbor_list(x, 0.07, lo, hi, period, kind=kind, keep=VIEW_KEEP))
+    finally:
+        numba.set_num_threads(saved)
+    assert np.array_equal(out[0].offsets, out[1].offsets)
+    assert np.array_equal(out[0].indices, out[1].indices)
+    off, idx = reference_csr(x, 0.07, period, kind, VIEW_KEEP)
+    assert np.array_equal(out[0].offsets, off)
+    assert np.array_equal(out[0].indices, idx)
