@@ -404,27 +404,6 @@ def _gather_candidates(c, xs, order, kb, um, cell_start, ncell, reach, period, r
 
 
 @njit(cache=True, inline="always")
-def _compact(hit8, cj, m, buf):
-    """``buf[:k] = cj[hit]`` for a 0/1 byte mask ``hit`` viewed as 64-bit words ``hit8``.
-
-    A multiply gathers the eight bytes of a word into an 8-bit mask (byte t -> bit t); the
-    loop then visits only the set bits (trailing-zero count), so the cost is per hit.
-    """
-    k = np.uint64(0)
-    for w in range(np.uint64((m + 7) // 8)):
-        word = hit8[w]
-        if word == 0:
-            continue
-        bits = (word * np.uint64(0x0102040810204080)) >> np.uint64(56)
-        q0 = np.uint64(8) * w
-        while bits:
-            buf[k] = cj[q0 + np.uint64(trailing_zeros(bits))]
-            k += np.uint64(1)
-            bits &= bits - np.uint64(1)
-    return np.int64(k)
-
-
-@njit(cache=True, inline="always")
 def _kind_hits(xi0, xi1, xi2, cx0, cx1, cx2, cb, rm, m, r2max, hit):
     """Hit mask of the candidates within r2max whose kind bit is in ``rm``."""
     for q in range(np.uint64(m)):
@@ -466,22 +445,32 @@ def _clear_self(hit, cj, m, i, ascending):
                 hit[q] = 0
 
 
+@njit(cache=True, inline="always")
+def _popcount(w):
+    w = w - ((w >> np.uint64(1)) & np.uint64(0x5555555555555555))
+    w = (w & np.uint64(0x3333333333333333)) + ((w >> np.uint64(2)) & np.uint64(0x3333333333333333))
+    w = (w + (w >> np.uint64(4))) & np.uint64(0x0F0F0F0F0F0F0F0F)
+    return np.int64((w * np.uint64(0x0101010101010101)) >> np.uint64(56))
+
+
 @njit(cache=True, parallel=True)
 def _cell_pass(xs, order, kb, rmask, cell_start, ncell, reach, period, r2max, maxcand,
-               offsets, out):
-    """Count (``out`` empty; returns counts, self excluded) or fill the CSR segments.
+               bits, offsets, out):
+    """Mask pass (``out`` empty): the hit bit mask of every particle (cell order) over its
+    cell's candidates into ``bits``; returns the counts (self excluded).  Fill pass: the
+    same candidates gathered again, each particle's set bits written to its CSR segment.
 
     ``kb`` (cell order) is the kind bit of every particle and ``rmask`` the kind bits its
     row keeps (all ones and 0xFF without a pair filter).  A cell gathers only candidates
     whose kind some of its particles keep; when all its particles keep the same kinds the
-    distance loops need no kind test.  Each particle writes only its own segment (via a
-    per-chunk scratch row: the branch-free compaction stores one slot past the last hit),
+    distance loop needs no kind test.  Each particle writes only its own mask and segment,
     so the pass is race free, and the result does not depend on the thread count.
     """
     n = order.shape[0]
     fill = out.shape[0] > 0
     ncells = cell_start.shape[0] - 1
-    counts = np.zeros(n, dtype=np.int64)
+    counts = np.zeros(n if not fill else 0, dtype=np.int64)
+    magic = np.uint64(0x0102040810204080)
     # chunks of consecutive cells holding about equal numbers of particles (empty regions
     # of the grid cost nothing), split statically between the threads
     nchunk = max(1, min(ncells, n, 1024))
@@ -491,10 +480,9 @@ def _cell_pass(xs, order, kb, rmask, cell_start, ncell, reach, period, r2max, ma
     bounds[nchunk] = ncells
     for t in prange(nchunk):
         cx = np.empty((3, maxcand + 1))
-        cj = np.empty(maxcand + 8, dtype=np.int32)
-        cb = np.zeros(maxcand + 8, dtype=np.uint8)
-        buf = np.empty(maxcand + 8 if fill else 0, dtype=np.int32)
-        hit = np.zeros(maxcand + 8 if fill else 8, dtype=np.uint8)
+        cj = np.empty(maxcand + 64, dtype=np.int32)
+        cb = np.zeros(maxcand + 64, dtype=np.uint8)
+        hit = np.zeros(maxcand + 64, dtype=np.uint8)
         hit8 = hit[: 8 * (hit.shape[0] // 8)].view(np.uint64)
         cx0 = cx[0]
         cx1 = cx[1]
@@ -516,48 +504,52 @@ def _cell_pass(xs, order, kb, rmask, cell_start, ncell, reach, period, r2max, ma
             )
             if m == 0:
                 continue
-            if fill:
-                hit[m : m + 8] = 0  # padding of the last 8-candidate word
+            nw = np.uint64((m + 63) // 64)
+            if not fill:
+                hit[m : m + 64] = 0  # padding of the last 64-candidate word
             for p in range(p0, p1):
-                i = order[p]
                 rm = rmask[p]
                 if rm == 0:
+                    continue
+                row = bits[p]
+                if fill:
+                    base = np.uint64(offsets[order[p]])
+                    k = base
+                    for w in range(nw):
+                        word = row[w]
+                        q0 = np.uint64(64) * w
+                        while word:
+                            out[k] = cj[q0 + np.uint64(trailing_zeros(word))]
+                            k += np.uint64(1)
+                            word &= word - np.uint64(1)
+                    # a subsequence of ascending candidates ascends; otherwise (particles
+                    # far from cell-sorted, or a tiny periodic box) sort the segment
+                    if not ascending:
+                        out[base:k].sort()
                     continue
                 xi0 = xs[0, p]
                 xi1 = xs[1, p]
                 xi2 = xs[2, p]
-                own = (kb[p] & rm) != 0  # itself among the kept candidates
-                if fill:
-                    if uniform:
-                        for q in range(np.uint64(m)):
-                            d0 = xi0 - cx0[q]
-                            d1 = xi1 - cx1[q]
-                            d2 = xi2 - cx2[q]
-                            hit[q] = d0 * d0 + d1 * d1 + d2 * d2 <= r2max
-                    else:
-                        _kind_hits(xi0, xi1, xi2, cx0, cx1, cx2, cb, rm, m, r2max, hit)
-                    if own:
-                        _clear_self(hit, cj, m, i, ascending)
-                    # a compaction that skips 8 misses at a time
-                    k = _compact(hit8, cj, m, buf)
-                    base = np.uint64(offsets[i])
-                    for q in range(np.uint64(k)):
-                        out[base + q] = buf[q]
-                    # a subsequence of ascending candidates ascends; otherwise (particles
-                    # far from cell-sorted, or a tiny periodic box) sort the segment
-                    if not ascending:
-                        out[base : base + np.uint64(k)].sort()
+                if uniform:
+                    for q in range(np.uint64(m)):
+                        d0 = xi0 - cx0[q]
+                        d1 = xi1 - cx1[q]
+                        d2 = xi2 - cx2[q]
+                        hit[q] = d0 * d0 + d1 * d1 + d2 * d2 <= r2max
                 else:
-                    if uniform:
-                        k = 0
-                        for q in range(np.uint64(m)):
-                            d0 = xi0 - cx0[q]
-                            d1 = xi1 - cx1[q]
-                            d2 = xi2 - cx2[q]
-                            k += d0 * d0 + d1 * d1 + d2 * d2 <= r2max
-                    else:
-                        k = _kind_count(xi0, xi1, xi2, cx0, cx1, cx2, cb, rm, m, r2max)
-                    counts[i] = k - own
+                    _kind_hits(xi0, xi1, xi2, cx0, cx1, cx2, cb, rm, m, r2max, hit)
+                if (kb[p] & rm) != 0:  # itself among the kept candidates
+                    _clear_self(hit, cj, m, order[p], ascending)
+                # bytes -> bits: one multiply gathers the 8 bytes of a word (byte t -> bit t)
+                k = 0
+                for w in range(nw):
+                    word = np.uint64(0)
+                    for b in range(np.uint64(8)):
+                        v = hit8[np.uint64(8) * w + b]
+                        word |= ((v * magic) >> np.uint64(56)) << (np.uint64(8) * b)
+                    row[w] = word
+                    k += _popcount(word)
+                counts[order[p]] = k
     return counts
 
 
@@ -624,12 +616,14 @@ def build_neighbor_list(
     maxcand = _max_candidates(cell_start, g.ncell, g.reach, g.period)
     kb, rmask = _kind_bits(order, *_pair_filter(kind, keep, n))
     args = (xs, order32, kb, rmask, cell_start, g.ncell, g.reach, g.period, r2max, maxcand)
+    # hit bit masks of the mask pass, read back by the fill pass (no second distance test)
+    bits = np.empty((n, (maxcand + 63) // 64), dtype=np.uint64)
     offsets = np.zeros(n + 1, dtype=np.int64)
-    counts = _cell_pass(*args, offsets, np.zeros(0, np.int32))
+    counts = _cell_pass(*args, bits, offsets, np.zeros(0, np.int32))
     np.cumsum(counts, out=offsets[1:])
     indices = np.empty(int(offsets[-1]), dtype=np.int32)
     if indices.shape[0]:
-        _cell_pass(*args, offsets, indices)
+        _cell_pass(*args, bits, offsets, indices)
     return NeighborList(offsets, indices, radius, period)
 
 
