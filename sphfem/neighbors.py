@@ -11,12 +11,15 @@ Algorithm (CompactNSearch / PySPH ``LinkedListNNPS`` style, cell size = radius):
    grid, so particles slightly outside ``[lo, hi]`` are fine);
 2. counting sort of the cell ids -> ``cell_start`` (exclusive cumsum) and ``order``;
    positions are gathered into cell order, one contiguous row per axis;
-3. per cell (``prange`` over chunks of cells): the candidates of its 3^dim stencil are
-   gathered once into contiguous scratch arrays, with the periodic image shift applied and
-   pruned to those within ``radius`` of the cell's bounding box; every particle of the cell
-   then scans them with a vectorised loop.  A *count* pass gives ``offsets``; a *fill*
-   pass computes a 0/1 hit mask (vectorised), compacts it 8 candidates at a time over the
-   set bits only, and writes each particle's own CSR segment (gather only, race free).
+3. *mask pass*, per cell (``prange`` over chunks of cells): the candidates of its 3^dim
+   stencil are gathered once into contiguous scratch arrays, with the periodic image shift
+   applied, pruned to those within ``radius`` of the cell's bounding box (and, with a pair
+   filter, to the kinds some particle of the cell keeps), and sorted by id (insertion sort:
+   on a cell-sorted set they already ascend, or nearly).  Their ids are kept per cell; every
+   particle of the cell scans them with a vectorised loop into a 0/1 hit mask, packed into a
+   bit mask per particle (one multiply per 8 candidates) whose popcount is its count;
+4. ``offsets`` (cumsum); *fill pass*: every particle writes the ids of its set bits
+   (trailing-zero count) into its own CSR segment -- no second distance test, race free.
 
 Every particle's neighbours are returned sorted by index, so the list does not depend on
 the thread count.  Pairs at distance exactly ``radius`` are included (``r^2 <= R^2``, no
@@ -253,8 +256,8 @@ def _image(a, nc, L):
 # scratch arrays, then every particle of the cell scans them with a branch-free loop.
 # Hot loops index with unsigned integers: numba then skips its negative-index wraparound
 # code, which otherwise blocks vectorisation (4-7x slower candidate loops).
-# Strict IEEE maths here (no fastmath): counting and filling must agree bit for bit on
-# r^2 <= R^2, whatever the vectorisation of the count loop.
+# Strict IEEE maths here (no fastmath): r^2 <= R^2 must not depend on the vectorisation
+# (the same pair tested from both ends must agree: symmetric lists).
 
 
 @njit(cache=True, inline="always")
@@ -265,8 +268,8 @@ def _cell_xyz(c, ncell):
 
 
 @njit(cache=True)
-def _max_candidates(cell_start, ncell, reach, period):
-    """Largest number of (unpruned) stencil candidates over non-empty cells."""
+def _stencil_counts(cell_start, ncell, reach, period):
+    """Number of (unpruned) stencil candidates of every cell (0 for empty cells)."""
     ncells = cell_start.shape[0] - 1
     best = np.zeros(ncells, dtype=np.int64)
     for c in range(ncells):
@@ -292,7 +295,7 @@ def _max_candidates(cell_start, ncell, reach, period):
                                 m += cell_start[row + ee + run + 1] - cell_start[row + ee]
                                 e += run + 1
         best[c] = m
-    return best.max() if ncells else 0
+    return best
 
 
 @njit(cache=True, inline="always")
@@ -453,34 +456,46 @@ def _popcount(w):
     return np.int64((w * np.uint64(0x0101010101010101)) >> np.uint64(56))
 
 
-@njit(cache=True, parallel=True)
-def _cell_pass(xs, order, kb, rmask, cell_start, ncell, reach, period, r2max, maxcand,
-               bits, offsets, out):
-    """Mask pass (``out`` empty): the hit bit mask of every particle (cell order) over its
-    cell's candidates into ``bits``; returns the counts (self excluded).  Fill pass: the
-    same candidates gathered again, each particle's set bits written to its CSR segment.
+@njit(cache=True, inline="always")
+def _popcount(w):
+    w = w - ((w >> np.uint64(1)) & np.uint64(0x5555555555555555))
+    w = (w & np.uint64(0x3333333333333333)) + ((w >> np.uint64(2)) & np.uint64(0x3333333333333333))
+    w = (w + (w >> np.uint64(4))) & np.uint64(0x0F0F0F0F0F0F0F0F)
+    return np.int64((w * np.uint64(0x0101010101010101)) >> np.uint64(56))
 
-    ``kb`` (cell order) is the kind bit of every particle and ``rmask`` the kind bits its
-    row keeps (all ones and 0xFF without a pair filter).  A cell gathers only candidates
-    whose kind some of its particles keep; when all its particles keep the same kinds the
-    distance loop needs no kind test.  Each particle writes only its own mask and segment,
-    so the pass is race free, and the result does not depend on the thread count.
-    """
-    n = order.shape[0]
-    fill = out.shape[0] > 0
+
+@njit(cache=True)
+def _chunks(cell_start, n):
+    """Bounds of chunks of consecutive cells holding about equal numbers of particles
+    (empty regions of the grid cost nothing), split statically between the threads."""
     ncells = cell_start.shape[0] - 1
-    counts = np.zeros(n if not fill else 0, dtype=np.int64)
-    magic = np.uint64(0x0102040810204080)
-    # chunks of consecutive cells holding about equal numbers of particles (empty regions
-    # of the grid cost nothing), split statically between the threads
     nchunk = max(1, min(ncells, n, 1024))
     targets = (np.arange(nchunk + 1) * n) // nchunk
     bounds = np.searchsorted(cell_start[1:], targets, side="right")
     bounds[0] = 0
     bounds[nchunk] = ncells
-    for t in prange(nchunk):
+    return bounds
+
+
+@njit(cache=True, parallel=True)
+def _mask_pass(xs, order, kb, rmask, cell_start, ncell, reach, period, r2max, maxcand,
+               cand_start, cand, cand_m, cand_asc, bits):
+    """Per cell: gather the candidates (ids into ``cand[cand_start[c]:]``, their number in
+    ``cand_m``, ``cand_asc`` whether they ascend); per particle (cell order): its hit bit
+    mask over them into ``bits``.  Returns the counts (self excluded).
+
+    ``kb`` (cell order) is the kind bit of every particle and ``rmask`` the kind bits its
+    row keeps (all ones and 0xFF without a pair filter).  A cell gathers only candidates
+    whose kind some of its particles keep; when all its particles keep the same kinds the
+    distance loop needs no kind test.  Each particle writes only its own mask, so the pass
+    is race free, and the result does not depend on the thread count.
+    """
+    n = order.shape[0]
+    counts = np.zeros(n, dtype=np.int64)
+    magic = np.uint64(0x0102040810204080)
+    bounds = _chunks(cell_start, n)
+    for t in prange(bounds.shape[0] - 1):
         cx = np.empty((3, maxcand + 1))
-        cj = np.empty(maxcand + 64, dtype=np.int32)
         cb = np.zeros(maxcand + 64, dtype=np.uint8)
         hit = np.zeros(maxcand + 64, dtype=np.uint8)
         hit8 = hit[: 8 * (hit.shape[0] // 8)].view(np.uint64)
@@ -490,6 +505,7 @@ def _cell_pass(xs, order, kb, rmask, cell_start, ncell, reach, period, r2max, ma
         for c in range(bounds[t], bounds[t + 1]):
             p0 = cell_start[c]
             p1 = cell_start[c + 1]
+            cand_m[c] = 0
             if p1 == p0:
                 continue
             um = rmask[p0]  # kinds kept by some particle of the cell
@@ -499,33 +515,19 @@ def _cell_pass(xs, order, kb, rmask, cell_start, ncell, reach, period, r2max, ma
                 um |= rmask[p]
             if um == 0:
                 continue  # counts stay 0
+            cj = cand[cand_start[c] : cand_start[c + 1]]
             m, ascending = _gather_candidates(
                 c, xs, order, kb, um, cell_start, ncell, reach, period, r2max, cx, cj, cb
             )
+            cand_m[c] = m
+            cand_asc[c] = ascending
             if m == 0:
                 continue
             nw = np.uint64((m + 63) // 64)
-            if not fill:
-                hit[m : m + 64] = 0  # padding of the last 64-candidate word
+            hit[m : m + 64] = 0  # padding of the last 64-candidate word
             for p in range(p0, p1):
                 rm = rmask[p]
                 if rm == 0:
-                    continue
-                row = bits[p]
-                if fill:
-                    base = np.uint64(offsets[order[p]])
-                    k = base
-                    for w in range(nw):
-                        word = row[w]
-                        q0 = np.uint64(64) * w
-                        while word:
-                            out[k] = cj[q0 + np.uint64(trailing_zeros(word))]
-                            k += np.uint64(1)
-                            word &= word - np.uint64(1)
-                    # a subsequence of ascending candidates ascends; otherwise (particles
-                    # far from cell-sorted, or a tiny periodic box) sort the segment
-                    if not ascending:
-                        out[base:k].sort()
                     continue
                 xi0 = xs[0, p]
                 xi1 = xs[1, p]
@@ -541,6 +543,7 @@ def _cell_pass(xs, order, kb, rmask, cell_start, ncell, reach, period, r2max, ma
                 if (kb[p] & rm) != 0:  # itself among the kept candidates
                     _clear_self(hit, cj, m, order[p], ascending)
                 # bytes -> bits: one multiply gathers the 8 bytes of a word (byte t -> bit t)
+                row = bits[p]
                 k = 0
                 for w in range(nw):
                     word = np.uint64(0)
@@ -551,6 +554,40 @@ def _cell_pass(xs, order, kb, rmask, cell_start, ncell, reach, period, r2max, ma
                     k += _popcount(word)
                 counts[order[p]] = k
     return counts
+
+
+@njit(cache=True, parallel=True)
+def _fill_pass(order, rmask, cell_start, cand_start, cand, cand_m, cand_asc, bits, offsets,
+               out):
+    """Every particle writes the candidates of its set bits to its own CSR segment (sorted
+    when its cell's candidates do not ascend); race free."""
+    n = order.shape[0]
+    bounds = _chunks(cell_start, n)
+    for t in prange(bounds.shape[0] - 1):
+        for c in range(bounds[t], bounds[t + 1]):
+            m = cand_m[c]
+            if m == 0:
+                continue
+            cj = cand[cand_start[c] : cand_start[c + 1]]
+            ascending = cand_asc[c]
+            nw = np.uint64((m + 63) // 64)
+            for p in range(cell_start[c], cell_start[c + 1]):
+                if rmask[p] == 0:
+                    continue
+                row = bits[p]
+                base = np.uint64(offsets[order[p]])
+                k = base
+                for w in range(nw):
+                    word = row[w]
+                    q0 = np.uint64(64) * w
+                    while word:
+                        out[k] = cj[q0 + np.uint64(trailing_zeros(word))]
+                        k += np.uint64(1)
+                        word &= word - np.uint64(1)
+                # a subsequence of ascending candidates ascends; otherwise (particles far
+                # from cell-sorted, or a tiny periodic box) sort the segment
+                if not ascending:
+                    out[base:k].sort()
 
 
 # ----------------------------------------------------------------------------- public API
@@ -585,7 +622,7 @@ def build_neighbor_list(
     """
     x = _check_positions(x)
     n, dim = x.shape
-    if sys.byteorder != "little":  # _compact reads a byte mask as little-endian words
+    if sys.byteorder != "little":  # _mask_pass reads a byte mask as little-endian words
         raise NotImplementedError("the neighbour search assumes a little-endian machine")
     radius = float(radius)
     if not (np.isfinite(radius) and radius > 0.0):
@@ -613,17 +650,24 @@ def build_neighbor_list(
     xs = _gather_columns(xw, order)
     order32 = order.astype(np.int32)
     r2max = radius * radius
-    maxcand = _max_candidates(cell_start, g.ncell, g.reach, g.period)
-    kb, rmask = _kind_bits(order, *_pair_filter(kind, keep, n))
-    args = (xs, order32, kb, rmask, cell_start, g.ncell, g.reach, g.period, r2max, maxcand)
-    # hit bit masks of the mask pass, read back by the fill pass (no second distance test)
+    ub = _stencil_counts(cell_start, g.ncell, g.reach, g.period)
+    maxcand = int(ub.max())
+    cand_start = np.zeros(ub.shape[0] + 1, dtype=np.int64)
+    np.cumsum(ub, out=cand_start[1:])
+    cand = np.empty(int(cand_start[-1]), dtype=np.int32)  # every cell's candidate ids
+    cand_m = np.empty(ub.shape[0], dtype=np.int64)
+    cand_asc = np.empty(ub.shape[0], dtype=np.bool_)
+    # hit bit masks of the mask pass, read by the fill pass (no second distance test)
     bits = np.empty((n, (maxcand + 63) // 64), dtype=np.uint64)
+    kb, rmask = _kind_bits(order, *_pair_filter(kind, keep, n))
+    counts = _mask_pass(xs, order32, kb, rmask, cell_start, g.ncell, g.reach, g.period, r2max,
+                        maxcand, cand_start, cand, cand_m, cand_asc, bits)
     offsets = np.zeros(n + 1, dtype=np.int64)
-    counts = _cell_pass(*args, bits, offsets, np.zeros(0, np.int32))
     np.cumsum(counts, out=offsets[1:])
     indices = np.empty(int(offsets[-1]), dtype=np.int32)
     if indices.shape[0]:
-        _cell_pass(*args, bits, offsets, indices)
+        _fill_pass(order32, rmask, cell_start, cand_start, cand, cand_m, cand_asc, bits,
+                   offsets, indices)
     return NeighborList(offsets, indices, radius, period)
 
 
