@@ -325,9 +325,10 @@ def _gather_run(xs, order, kb, um, ps, pe, sh0, sh1, sh2, bbox, r2max, cx, cj, c
 
 @njit(cache=True, inline="always")
 def _sort_candidates(cx, cj, cb, m):
-    """Insertion sort of the candidates by id (``cx``, ``cb`` moved along), given up after
-    a budget of moves proportional to ``m``.  Returns whether ``cj[:m]`` strictly ascends
-    (every particle's neighbours then come out sorted)."""
+    """Sort the candidates by id (``cx``, ``cb`` moved along): insertion sort (nearly sorted
+    on a cell-sorted set), a merge sort after a budget of moves proportional to ``m``.
+    Returns whether ``cj[:m]`` strictly ascends (every particle's neighbours then come out
+    sorted; not in a tiny periodic box, where a particle can be a candidate twice)."""
     budget = 4 * m + 64
     for q in range(1, m):
         v = cj[q]
@@ -351,8 +352,19 @@ def _sort_candidates(cx, cj, cb, m):
         cx[2, r] = y2
         cb[r] = b
         budget -= q - r
-        if budget < 0:
-            return False
+        if budget < 0:  # far from sorted: a merge sort of the ids, then permute
+            perm = np.argsort(cj[:m], kind="mergesort")
+            tj = cj[:m].copy()
+            tx = cx[:, :m].copy()
+            tb = cb[:m].copy()
+            for r in range(m):
+                s = perm[r]
+                cj[r] = tj[s]
+                cx[0, r] = tx[0, s]
+                cx[1, r] = tx[1, s]
+                cx[2, r] = tx[2, s]
+                cb[r] = tb[s]
+            break
     ascending = True
     for q in range(1, m):
         ascending &= cj[q] > cj[q - 1]
