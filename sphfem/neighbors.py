@@ -36,6 +36,7 @@ neighbour segment must be sorted).
 from __future__ import annotations
 
 import sys
+import threading
 from dataclasses import dataclass
 
 import numpy as np
@@ -666,11 +667,12 @@ def build_neighbor_list(
     maxcand = int(ub.max())
     cand_start = np.zeros(ub.shape[0] + 1, dtype=np.int64)
     np.cumsum(ub, out=cand_start[1:])
-    cand = np.empty(int(cand_start[-1]), dtype=np.int32)  # every cell's candidate ids
+    cand = _scratch("cand", int(cand_start[-1]), np.int32)  # every cell's candidate ids
     cand_m = np.empty(ub.shape[0], dtype=np.int64)
     cand_asc = np.empty(ub.shape[0], dtype=np.bool_)
     # hit bit masks of the mask pass, read by the fill pass (no second distance test)
-    bits = np.empty((n, (maxcand + 63) // 64), dtype=np.uint64)
+    words = (maxcand + 63) // 64
+    bits = _scratch("bits", n * words, np.uint64).reshape(n, words)
     kb, rmask = _kind_bits(order, *_pair_filter(kind, keep, n))
     counts = _mask_pass(xs, order32, kb, rmask, cell_start, g.ncell, g.reach, g.period, r2max,
                         maxcand, cand_start, cand, cand_m, cand_asc, bits)
@@ -696,6 +698,20 @@ def _kind_bits(order, kind, keep):
             kb[p] = np.uint8(1) << k
             rmask[p] = keep[k]
     return kb, rmask
+
+
+_SCRATCH = threading.local()
+
+
+def _scratch(name, size, dtype):
+    """A work array of ``size`` elements, kept between builds of the same thread (these
+    are tens of MB: fresh ones cost their page faults at every build, which doubled the
+    first rebuilds of a fluid run)."""
+    buf = getattr(_SCRATCH, name, None)
+    if buf is None or buf.shape[0] < size:
+        buf = np.empty(size + size // 8, dtype=dtype)
+        setattr(_SCRATCH, name, buf)
+    return buf[:size]
 
 
 def _pair_filter(kind, keep, n):
