@@ -74,6 +74,13 @@ def _cmd_validate(args) -> int:
         for name, fn in sorted(cases.items()):
             doc = (fn.__doc__ or "").strip().splitlines()
             print(f"{name:<20} {doc[0] if doc else ''}")
+        from sphfem.validation.stability import ROWS
+
+        print(f"{'all':<20} every case above into --out DIR/report.md")
+        print(f"{'stability':<20} the stiff/extreme-case matrix ({len(ROWS)} rows, "
+              "--only ROW,ROW):")
+        for r in ROWS:
+            print(f"  {r.name:<30} {r.description}")
         return EXIT_OK
     if not args.case:
         raise UsageError("validate: give a case name or --list")

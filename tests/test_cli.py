@@ -22,6 +22,13 @@ def test_validate_list(capsys):
     assert main(["validate", "--list"]) == 0
     out = capsys.readouterr().out
     assert "laplacian" in out and "gradient" in out
+    assert "stability" in out and "heat-dt-2x-capped" in out and "all" in out
+
+
+def test_validate_stability_unknown_row_is_usage_error(tmp_path, capsys):
+    assert main(["validate", "stability", "--quick", "--only", "nope"]) == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "unknown row(s) nope" in err[0]
 
 
 def test_unknown_case_is_usage_error(capsys):
