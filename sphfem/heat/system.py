@@ -23,6 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
+from numba import njit
 
 from sphfem import operators as op
 from sphfem.heat.conduction import (
@@ -103,8 +104,15 @@ class HeatSystem:
         args = self.kernel_args
         offsets, indices = args[2], args[3]
         if self.laplacian == "cleary":
+            x, vol = args[0], args[1]
+            ref = self.__dict__.get("_ref")
+            if ref is None or ref[0].shape != x.shape:
+                changed = np.ones(self.n, dtype=np.bool_)
+            else:  # only pairs with a moved (or resized) particle are recomputed
+                changed = _changed(x, vol, ref[0], ref[1])
             cleary_refresh(self.k, *args, self.inv_rc, self.active, self._rule_src,
-                           self._rule_coef, self.g, self.g_outside, self._rows)
+                           self._rule_coef, self.g, self.g_outside, self._rows, changed)
+            self._ref = (x.copy(), vol.copy())
             if not hasattr(self, "ok"):
                 self._set_corrections(np.ones(self.n, bool), np.zeros(self.n))
         else:
@@ -264,3 +272,16 @@ class HeatSystem:
         """Thermal energy sum_i m_i c_i T_i over the active particles [J]."""
         a = self.active
         return float(np.sum(m[a] * c[a] * T[a]))
+
+
+@njit(cache=True)
+def _changed(x, vol, x_ref, vol_ref):
+    """Per particle: position or volume differs from the reference (exact comparison)."""
+    n, dim = x.shape
+    out = np.zeros(n, dtype=np.bool_)
+    for i in range(n):
+        c = vol[i] != vol_ref[i]
+        for a in range(dim):
+            c = c or x[i, a] != x_ref[i, a]
+        out[i] = c
+    return out
