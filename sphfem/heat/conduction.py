@@ -236,10 +236,11 @@ def gershgorin_rows(g, offsets, indices, inv_rc, active, rule_src, rule_coef, g_
 
 @njit(cache=True, inline="always", fastmath=op.FASTMATH)
 def _cleary_row(i, k, x, vol, offsets, indices, R, sigma, kind, period, inv_rc, active,
-                rule_src, rule_coef, g, g_out, changed):
+                rule_src, rule_coef, g, g_out, changed, rows_prev):
     """Row i of :func:`cleary_refresh`; returns its Gershgorin sum (0 if not active),
     accumulated in the same loop unless a ghost with a rule is a neighbour.  A pair of two
-    particles that ``changed`` marks False keeps its conductance in ``g``."""
+    particles that ``changed`` marks False keeps its conductance in ``g``; a row without any
+    changed particle returns ``rows_prev`` (its sum of the last call) untouched."""
     ki = k[i]
     irc = inv_rc[i]
     R2 = R * R
@@ -249,6 +250,14 @@ def _cleary_row(i, k, x, vol, offsets, indices, R, sigma, kind, period, inv_rc, 
     off = 0.0
     nrule = 0
     ci = changed[i]
+    if not ci:  # a row with no changed particle keeps its conductances and its sum
+        quiet = True
+        for jj in range(offsets[i], offsets[i + 1]):
+            if changed[indices[jj]]:
+                quiet = False
+                break
+        if quiet:
+            return rows_prev
     for jj in range(offsets[i], offsets[i + 1]):
         j = indices[jj]
         if ci or changed[j]:
@@ -291,7 +300,7 @@ def _cleary_refresh_parallel(k, x, vol, offsets, indices, R, sigma, kind, period
     n = x.shape[0]
     for i in prange(n):
         rows[i] = _cleary_row(i, k, x, vol, offsets, indices, R, sigma, kind, period, inv_rc,
-                              active, rule_src, rule_coef, g, g_out, changed)
+                              active, rule_src, rule_coef, g, g_out, changed, rows[i])
     best = 0.0
     for i in range(n):
         best = max(best, rows[i])
@@ -305,7 +314,7 @@ def _cleary_refresh_serial(k, x, vol, offsets, indices, R, sigma, kind, period, 
     best = 0.0
     for i in range(x.shape[0]):
         rows[i] = _cleary_row(i, k, x, vol, offsets, indices, R, sigma, kind, period, inv_rc,
-                              active, rule_src, rule_coef, g, g_out, changed)
+                              active, rule_src, rule_coef, g, g_out, changed, rows[i])
         best = max(best, rows[i])
     return best
 
