@@ -80,7 +80,7 @@ import numpy as np
 from numba import njit, prange
 
 from sphfem.fluid.passes import _F, FASTMATH, _invert, _sep
-from sphfem.particles import FLUID
+from sphfem.particles import FLUID, WALL
 
 
 def _iif_integral(power: int) -> float:
@@ -164,12 +164,36 @@ def iif_accel(x, m, kind, offsets, indices, R, s, m_bar, period, acc):
             acc[i, 2] += a2
 
 
+@njit(cache=True, inline="always", fastmath=FASTMATH)
+def color_gradient_row(i, x, V, kind, offsets, indices, R, fac2, kkind, period, periodic,
+                       only_fluid):
+    """grad C_i = sum_j V_j grad_i W_ij over the fluid (``only_fluid``) or fluid and wall
+    neighbours of row ``i``, as three components (the unused ones 0)."""
+    dim = x.shape[1]
+    R2 = R * R
+    g0 = 0.0
+    g1 = 0.0
+    g2 = 0.0
+    for jj in range(offsets[i], offsets[i + 1]):
+        j = indices[jj]
+        if kind[j] != FLUID and (only_fluid or kind[j] != WALL):
+            continue
+        r0, r1, r2 = _sep(x, i, j, dim, period, periodic)
+        d2 = r0 * r0 + r1 * r1 + r2 * r2
+        if d2 >= R2 or d2 == 0.0:
+            continue
+        t = V[j] * _F(np.sqrt(d2), R, fac2, kkind)
+        g0 += t * r0
+        g1 += t * r1
+        g2 += t * r2
+    return g0, g1, g2
+
+
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
 def color_gradient(x, V, kind, offsets, indices, R, sigma, kkind, period, only_fluid, gc):
     """grad C_i = sum_j V_j grad_i W_ij over fluid rows (``only_fluid``: fluid neighbours
     only, else fluid and wall neighbours); other rows are zeroed."""
     n, dim = x.shape
-    R2 = R * R
     fac2 = sigma / (R * R)
     periodic = False
     for k in range(dim):
@@ -179,18 +203,8 @@ def color_gradient(x, V, kind, offsets, indices, R, sigma, kkind, period, only_f
         g1 = 0.0
         g2 = 0.0
         if kind[i] == FLUID:
-            for jj in range(offsets[i], offsets[i + 1]):
-                j = indices[jj]
-                if only_fluid and kind[j] != FLUID:
-                    continue
-                r0, r1, r2 = _sep(x, i, j, dim, period, periodic)
-                d2 = r0 * r0 + r1 * r1 + r2 * r2
-                if d2 >= R2 or d2 == 0.0:
-                    continue
-                t = V[j] * _F(np.sqrt(d2), R, fac2, kkind)
-                g0 += t * r0
-                g1 += t * r1
-                g2 += t * r2
+            g0, g1, g2 = color_gradient_row(i, x, V, kind, offsets, indices, R, fac2, kkind,
+                                            period, periodic, only_fluid)
         gc[i, 0] = g0
         if dim > 1:
             gc[i, 1] = g1

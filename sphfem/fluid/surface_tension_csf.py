@@ -71,8 +71,9 @@ import numpy as np
 from numba import njit, prange
 
 from sphfem.fluid.passes import _F, FASTMATH, _sep
+from sphfem.fluid.surface import color_gradient_row
 from sphfem.kernels import kernel_f
-from sphfem.particles import FLUID, WALL
+from sphfem.particles import FLUID
 
 #: normal weight omega = smoothstep of |grad C| R from NORMAL_LO to NORMAL_HI (|grad C| R
 #: ~ 1.3 on the outer layer of a droplet, ~ 0.25 on the second, < 0.1 in the bulk)
@@ -93,7 +94,6 @@ def csf_normals(x, V, kind, offsets, indices, R, sigma, kkind, period, a0, a1, g
     (smoothstep of |g| R from ``a0`` to ``a1``) of every fluid particle; other rows are
     zeroed."""
     n, dim = x.shape
-    R2 = R * R
     fac2 = sigma / (R * R)
     periodic = False
     for k in range(dim):
@@ -103,18 +103,8 @@ def csf_normals(x, V, kind, offsets, indices, R, sigma, kkind, period, a0, a1, g
         g1 = 0.0
         g2 = 0.0
         if kind[i] == FLUID:
-            for jj in range(offsets[i], offsets[i + 1]):
-                j = indices[jj]
-                if kind[j] != FLUID and kind[j] != WALL:
-                    continue
-                r0, r1, r2 = _sep(x, i, j, dim, period, periodic)
-                d2 = r0 * r0 + r1 * r1 + r2 * r2
-                if d2 >= R2 or d2 == 0.0:
-                    continue
-                t = V[j] * _F(np.sqrt(d2), R, fac2, kkind)
-                g0 += t * r0
-                g1 += t * r1
-                g2 += t * r2
+            g0, g1, g2 = color_gradient_row(i, x, V, kind, offsets, indices, R, fac2, kkind,
+                                            period, periodic, False)
         g[i, 0] = g0
         if dim > 1:
             g[i, 1] = g1

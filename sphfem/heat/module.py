@@ -170,14 +170,14 @@ class HeatConduction(PhysicsModule):
 
     def _check_bounds(self, sim) -> None:
         """Stop the run when a temperature leaves the maximum-principle range (or is NaN)."""
-        T = sim.particles.T[self.system.active]
-        lo, hi = _min_max(T)
+        lo, hi = _min_max(sim.particles.T, self.system.active)
         self.T_range = [lo, hi]
         b_lo, b_hi = self.bounds
         if lo >= b_lo and hi <= b_hi:  # False for NaN
             return
         from sphfem.simulation import SimulationStopped
 
+        T = sim.particles.T[self.system.active]
         bad = ~((T >= b_lo) & (T <= b_hi))
         raise SimulationStopped(
             f"heat stopped at step {sim.step_count + 1}, t = {sim.t:.6g} s: {int(bad.sum())} "
@@ -226,10 +226,13 @@ class HeatConduction(PhysicsModule):
 
 
 @njit(cache=True)
-def _min_max(a):
-    """(min, max) of ``a``; NaN when any entry is NaN."""
+def _min_max(a, mask):
+    """(min, max) of ``a`` where ``mask`` (no copy in the step); NaN when one is NaN."""
     lo, hi = np.inf, -np.inf
-    for v in a:
+    for i in range(a.shape[0]):
+        if not mask[i]:
+            continue
+        v = a[i]
         if v != v:
             return np.nan, np.nan
         lo = min(lo, v)
