@@ -36,7 +36,9 @@ def _check(rec, ctx, path):
             ctx.error(f"{where}.mu", "missing: viscosity = \"laminar\" needs the dynamic "
                                      "viscosity mu [Pa s] (or set [fluid] viscosity = \"none\")")
         if rec.surface_tension != "none":
-            const = {"iif": rec.iif_s, "akinci": rec.akinci_gamma}.get(rec.surface_tension)
+            # the calibration constant's key exists only for its own model (Param.when)
+            key = {"iif": "iif_s", "akinci": "akinci_gamma"}.get(rec.surface_tension)
+            const = rec[key] if key is not None else None
             if const is None and m.sigma is None:
                 ctx.error(f"{where}.sigma", f"missing: surface_tension = "
                           f"\"{rec.surface_tension}\" needs the material's surface tension "
