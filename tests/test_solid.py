@@ -176,3 +176,57 @@ def test_substrate_uniaxial_pressure():
     r2 = sub.solve(point_forces=(np.array([[0.2, 1.0], [0.7, 1.0]]), F))
     assert np.allclose(sub.body.f_ext.sum(axis=0), F.sum(axis=0))
     assert r2.u[:, 1].min() < 0
+
+
+# ------------------------------------------------------------------ rollers (issue 14, bug 4)
+def _all_rollers(dim):
+    from sphfem.solid.backend import face_axes
+
+    return {g: "xyz"[ax] for g, (ax, _) in face_axes(dim).items()}
+
+
+@pytest.mark.parametrize("dim, shape", [(2, (8, 5)), (2, (12, 4)), (3, (5, 4, 4))])
+def test_uniform_heating_with_rollers_on_every_face_is_exact(dim, shape):
+    """Uniform dT, every face on rollers (normal held): the exact solution is u = 0 and the
+    hydrostatic stress of the SVK law at F = I, sigma = v (3 lam + 2 mu) (1/v^2 - 1) / 2,
+    v = 1 + alpha dT (linearised: -(3 lam + 2 mu) alpha dT, what FEM gets exactly).  The
+    rollers are symmetry planes (mirror ghosts), so TL-SPH gets it to round-off.  Before
+    the fix the roller held only the outermost layer: stress off by up to 22 % (2D) ."""
+    from sphfem.solid.backend import TLSPHSubstrate
+
+    dx, alpha, dT = 0.1, 1e-4, 50.0
+    sub = TLSPHSubstrate(np.zeros(dim), np.array(shape) * dx, dx, E, NU, alpha, T0=0.0,
+                         rho=RHO, rollers=_all_rollers(dim), tol=1e-8)
+    r = sub.solve(dT_nodal=dT)
+    v = 1 + alpha * dT
+    exact = v * (3 * LAM + 2 * MU) * (1 / v**2 - 1) / 2
+    assert np.abs(r.u).max() <= 1e-12 * alpha * dT * dx
+    s = r.stress
+    assert np.abs(s[:, range(3), range(3)] / exact - 1).max() < 1e-11
+    off = s - s[:, range(3), range(3)][:, :, None] * np.eye(3)
+    assert np.abs(off).max() < 1e-11 * abs(exact)
+
+
+def test_roller_is_a_symmetry_plane():
+    """A block clamped at the bottom under a temperature field symmetric about x = 0
+    (free top and sides): the half block with a roller on x = 0 gives the full block's
+    right half (displacement within the relaxation tolerance, 1e-6 of its maximum).  A
+    roller that held u_x on its layers, or the shear on the plane, would not."""
+    from sphfem.solid.backend import TLSPHSubstrate
+
+    dx, alpha = 0.1, 1e-3
+
+    def dT(x):
+        return 40.0 * np.cos(np.pi * x[0] / 2.0) * (1 + x[1])
+
+    full = TLSPHSubstrate((-1.0, 0.0), (1.0, 0.8), dx, E, NU, alpha, T0=0.0, rho=RHO,
+                          clamps=["bottom"], tol=1e-9).solve(dT_nodal=dT)
+    half_sub = TLSPHSubstrate((0.0, 0.0), (1.0, 0.8), dx, E, NU, alpha, T0=0.0, rho=RHO,
+                              clamps=["bottom"], rollers={"left": "x"}, tol=1e-9)
+    half = half_sub.solve(dT_nodal=dT)
+    X_full = full.substrate.X
+    k = np.array([np.flatnonzero(np.all(np.abs(X_full - x) < 1e-9, axis=1))[0]
+                  for x in half_sub.X])
+    scale = np.abs(full.u).max()
+    assert scale > 0 and np.abs(half.u - full.u[k]).max() < 1e-5 * scale
+    assert np.abs(half.stress - full.stress[k]).max() < 1e-5 * np.abs(full.stress).max()

@@ -9,8 +9,16 @@ The body is the cell-centred lattice of the box [lo, hi] (spacing dx).  Faces ar
 in the gmsh recipes: 2D ``left``/``right`` (x), ``bottom``/``top`` (y); 3D ``left``/``right``
 (x), ``front``/``back`` (y), ``bottom``/``top`` (z).  A clamped face gets ``clamp_layers``
 rows of held particles outside the box (so the face itself carries the kernel support of
-the first real rows, as a clamped FE boundary does); a roller holds the listed components
-of the outermost particle layer.  :meth:`TLSPHSubstrate.solve` relaxes the body to the
+the first real rows, as a clamped FE boundary does).  A roller that holds the face normal
+(``{"bottom": "z"}``, also ``"xz"``) is a symmetry plane: ``clamp_layers`` rows of mirror
+ghosts outside the face follow their images inside (:meth:`SolidBody.mirror`; held
+components odd, free ones even), so the particles near the face see the full support of
+the symmetric continuation -- a uniform temperature rise with rollers on every face gives
+u = 0 and the exact hydrostatic stress to round-off.  (Holding the normal component of the
+particle layers instead is not exact: the stress divergence of the free particles within
+2R of the face sees the truncated B0 of the held ones, 0.5 % stress error with 3 layers.)
+A roller holding only tangential components holds them on ``roller_layers`` layers.
+:meth:`TLSPHSubstrate.solve` relaxes the body to the
 quasi-static state under the given loads (dynamic relaxation,
 :func:`sphfem.solid.integrate.relax`), warm-started from the previous solution.
 
@@ -32,7 +40,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from sphfem import kernels
-from sphfem.solid.body import SolidBody
+from sphfem.solid.body import SolidBody, _components
 from sphfem.solid.constitutive import lame
 from sphfem.solid.integrate import relax
 from sphfem.solid.lattice import box_lattice
@@ -44,6 +52,40 @@ def face_axes(dim: int) -> dict[str, tuple[int, int]]:
         return {"left": (0, -1), "right": (0, 1), "bottom": (1, -1), "top": (1, 1)}
     return {"left": (0, -1), "right": (0, 1), "front": (1, -1), "back": (1, 1),
             "bottom": (2, -1), "top": (2, 1)}
+
+
+def _mirror_images(X, lo, hi, faces, mirrored, tol):
+    """Ghosts of the roller planes in ``mirrored`` ({face: held components}) among the
+    lattice points ``X`` and their partners: a point beyond a mirrored face is reflected
+    across it (repeatedly, for a body between two mirrored faces) until it lies within the
+    body's extent on that axis.  Each reflection flips the reference coordinate (X_sign)
+    and the held components of the displacement (u_sign: odd in the held components, even
+    in the free ones -- zero shear traction on the plane).  Returns ``(ghost, partner,
+    u_sign, X_sign)``; ``partner`` is -1 where the image is not a lattice point."""
+    n, dim = X.shape
+    Y = X.copy()
+    su = np.ones((n, dim))
+    sx = np.ones((n, dim))
+    is_ghost = np.zeros(n, bool)
+    for _ in range(64):
+        moved = False
+        for g, comps in mirrored.items():
+            ax, side = faces[g]
+            edge = hi[ax] if side > 0 else lo[ax]
+            out = (Y[:, ax] > edge + tol) if side > 0 else (Y[:, ax] < edge - tol)
+            if out.any():
+                moved = True
+                is_ghost |= out
+                Y[out, ax] = 2 * edge - Y[out, ax]
+                sx[out, ax] *= -1
+                su[np.ix_(out, comps)] *= -1
+        if not moved:
+            break
+    ghost = np.flatnonzero(is_ghost)
+    d, j = cKDTree(X).query(Y[ghost])
+    partner = np.where(d <= tol, j, -1)
+    partner[np.isin(partner, ghost)] = -1
+    return ghost, partner, su[ghost], sx[ghost]
 
 
 @dataclass
@@ -104,7 +146,8 @@ class TLSPHSubstrate:
     def __init__(self, lo, hi, dx: float, E: float, nu: float, alpha: float,
                  T0: float = 293.15, rho: float = 1000.0, clamps=(), rollers=None,
                  support_factor: float = 3.0, hourglass: float = 10.0,
-                 clamp_layers: int | None = None, tol: float = 1e-6,
+                 clamp_layers: int | None = None, roller_layers: int | None = None,
+                 tol: float = 1e-6,
                  max_steps: int = 200000):
         t0 = time.perf_counter()
         lo = np.asarray(lo, float)
@@ -119,15 +162,32 @@ class TLSPHSubstrate:
         for g in list(clamps) + list(rollers):
             if g not in faces:
                 raise ValueError(f"unknown face {g!r}; expected one of {sorted(faces)}")
+        both = set(clamps) & set(rollers)
+        if both:
+            raise ValueError(f"faces {sorted(both)} are both clamped and on rollers")
         nl = clamp_layers if clamp_layers is not None else int(math.ceil(support_factor))
+        # rollers holding the face normal are symmetry planes: mirror ghosts (exact);
+        # rollers holding only tangential components hold them on `roller_layers` layers
+        mirrored = {g: _components(c, self.dim) for g, c in rollers.items()
+                    if faces[g][0] in _components(c, self.dim)}
         blo, bhi = lo.copy(), hi.copy()
-        for g in clamps:
+        for g in list(clamps) + list(mirrored):
             ax, side = faces[g]
             if side < 0:
                 blo[ax] -= nl * dx
             else:
                 bhi[ax] += nl * dx
         Xall = box_lattice(blo, bhi, dx)
+        ghost, partner, u_sign, X_sign = _mirror_images(Xall, lo, hi, faces, mirrored,
+                                                        1e-6 * dx)
+        keep = np.ones(len(Xall), bool)
+        keep[ghost[partner < 0]] = False  # images of empty space (body thinner than R)
+        if not keep.all():
+            new = np.cumsum(keep) - 1
+            ok = partner >= 0
+            ghost, partner = new[ghost[ok]], new[partner[ok]]
+            u_sign, X_sign = u_sign[ok], X_sign[ok]
+            Xall = Xall[keep]
         inside = np.all((Xall > lo) & (Xall < hi), axis=1)
         lam, mu = lame(self.E, self.nu)
         self.body = SolidBody(Xall, dx**self.dim, rho, lam, mu, self.alpha, dx,
@@ -135,6 +195,9 @@ class TLSPHSubstrate:
                               hourglass=hourglass)
         self.body.theta[:] = self.T0
         self.body.clamp(~inside)
+        if ghost.size:
+            self.body.mirror(ghost, partner, u_sign, X_sign)
+        self.n_mirror = int(ghost.size)
         self.inside = np.flatnonzero(inside)
         self.X = Xall[inside]
         self.vol = np.full(self.X.shape[0], dx**self.dim)
@@ -145,9 +208,15 @@ class TLSPHSubstrate:
             edge = hi[ax] if side > 0 else lo[ax]
             self.face_layer[g] = np.flatnonzero(inside & (np.abs(Xall[:, ax] - edge)
                                                           < 0.51 * dx))
+        self.roller_layers = nl if roller_layers is None else int(roller_layers)
+        if self.roller_layers < 1:
+            raise ValueError(f"roller_layers must be >= 1, got {roller_layers}")
         for g, comps in rollers.items():
-            m = np.zeros(Xall.shape[0], bool)
-            m[self.face_layer[g]] = True
+            if g in mirrored:
+                continue
+            ax, side = faces[g]
+            edge = hi[ax] if side > 0 else lo[ax]
+            m = inside & (np.abs(Xall[:, ax] - edge) < self.roller_layers * dx)
             self.body.roller(m, comps)
         self.clamps, self.rollers = clamps, rollers
         self.n_solves = 0

@@ -85,6 +85,7 @@ class SolidBody:
         self.P = np.zeros((n, self.dim, self.dim))
         self.f_int = np.zeros_like(X)
         self.force_evaluations = 0
+        self._mirror = None  # (ghost, partner, u_sign, X_sign), see mirror()
 
     # -- geometry --------------------------------------------------------------------------
     @property
@@ -112,6 +113,40 @@ class SolidBody:
         for c in _components(components, self.dim):
             self.fixed[mask, c] = True
 
+    def mirror(self, ghost, partner, u_sign, X_sign) -> None:
+        """Make particles ``ghost`` (k,) mirror images of ``partner`` (k,) across symmetry
+        planes (rollers): with S = diag(``u_sign``) and Q = diag(``X_sign``) (k, dim) of
+        +-1, every force evaluation sets
+
+            x_g = X_g + S (x_p - X_p),   F_g = I + S (F_p - I) Q,   theta_g = theta_p,
+
+        and B0_g = Q B0_p Q once, so a real particle near the plane sees the full support
+        of the mirrored body (its stress divergence is that of the symmetric continuation,
+        exact for every state symmetric about the plane, e.g. a uniform one).  Ghosts hold
+        every component (the integrators never move them) and their own forces are unused.
+        """
+        g = np.asarray(ghost, np.int64)
+        p = np.asarray(partner, np.int64)
+        su = np.asarray(u_sign, float).reshape(g.size, self.dim)
+        sx = np.asarray(X_sign, float).reshape(g.size, self.dim)
+        if np.isin(p, g).any():
+            raise ValueError("mirror: a partner particle is itself a ghost")
+        self.fixed[g] = True
+        B = self.ref.B
+        B[g] = sx[:, :, None] * B[p] * sx[:, None, :]
+        self._mirror = (g, p, su, sx)
+
+    def _mirror_positions(self, x) -> None:
+        g, p, su, _ = self._mirror
+        X = self.ref.X
+        x[g] = X[g] + su * (x[p] - X[p])
+        self.theta[g] = self.theta[p]
+
+    def _mirror_gradients(self) -> None:
+        g, p, su, sx = self._mirror
+        eye = np.eye(self.dim)
+        self.F[g] = eye + su[:, :, None] * (self.F[p] - eye) * sx[:, None, :]
+
     def prescribe_velocity(self, mask, velocity) -> None:
         """Move the particles in ``mask`` at ``velocity`` (dim,) (all components held)."""
         mask = np.asarray(mask, bool)
@@ -134,7 +169,11 @@ class SolidBody:
         ``x`` (default: the current ones); returns ``f_int`` (n, dim)."""
         x = self.x if x is None else x
         r = self.ref
+        if self._mirror is not None:
+            self._mirror_positions(x)
         deformation_gradient(x, r.vol, r.offsets, r.indices, r.gw, r.B, r.period, self.F)
+        if self._mirror is not None:
+            self._mirror_gradients()
         pk1_stress(self.F, self.theta - self.theta0, self.alpha, self.lam, self.mu, self.S,
                    self.P)
         if self.dim == 2:
