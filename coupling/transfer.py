@@ -26,9 +26,17 @@ figure 2.5 placement) (1) is the thesis' direct nodal loading.
 Temperatures -- interpolation at the substrate's nodes
 -------------------------------------------------------
 A target node is *covered* when it lies in the SPH solid region, taken as the union of the
-particles' cells: the nearest particle is within dx/2 in every coordinate (dx = V^(1/d) of
-that particle, relative tolerance 1e-6).  Uncovered nodes keep the reference temperature T0
-(no heat has reached them in the SPH model, whose region must enclose the heated zone).
+particles' cells: boxes centred on the particles with per-axis sides h_a (relative tolerance
+1e-6), |X_a - x_a| <= h_a / 2 for every axis a for some particle
+(:func:`particle_cells`).  The sides come from the particle lattice itself: h_a is the
+smallest |dx_a| to a neighbour lying in the cone around axis a (|dx_a| >= |dx_b| for every
+b), then all sides are scaled by one factor so that prod_a h_a = V, the particle's volume.
+On a Cartesian lattice with spacings (s_1, ..., s_d) -- the scenes' boxes, whose spacing is
+adjusted per axis -- this gives h_a = s_a exactly, so the cells tile the region with no gap
+at any aspect ratio (an isotropic lattice gives cubes of side V^(1/d); a disordered set,
+boxes of volume V with the aspect of the nearest neighbours).  Uncovered nodes keep the
+reference temperature T0 (no heat has reached them in the SPH model, whose region must
+enclose the heated zone).
 Covered nodes take (``method``):
 
 * ``"mls"`` (default) -- moving least squares with a linear basis and kernel weights
@@ -197,9 +205,8 @@ class TemperatureMap:
             self.A = sp.csr_matrix((0, 0))
             return
         tree = cKDTree(Xs)
-        d_inf, near = tree.query(Xt, p=np.inf)
-        dx = vol[near] ** (1.0 / dim)
-        self.covered = d_inf <= 0.5 * dx * (1 + 1e-6)
+        self.cells = particle_cells(Xs, vol, tree)
+        self.covered = _in_cells(Xt, Xs, self.cells, tree)
         idx = np.nonzero(self.covered)[0]
         Xc = Xt[idx]
         m = len(idx)
@@ -253,6 +260,53 @@ class TemperatureMap:
     def stats(self) -> dict:
         return {"method": self.method, "targets": self.n_targets,
                 "covered": int(self.covered.sum()), "mls_fallbacks": self.fallbacks}
+
+
+def particle_cells(X, vol, tree=None, k: int | None = None) -> np.ndarray:
+    """Per-axis cell sides h (n, dim) of particles ``X`` (n, dim) with volumes ``vol``:
+    h_a = min |dx_a| over the neighbours in the cone of axis a (|dx_a| >= |dx_b|, among the
+    ``k`` nearest, default 4^dim), rescaled so that prod_a h_a = V (module docstring).  An
+    axis with no neighbour in its cone (a single layer) takes the side that completes the
+    volume; a particle with none at all, V^(1/d)."""
+    from scipy.spatial import cKDTree
+
+    X = np.atleast_2d(np.asarray(X, float))
+    n, dim = X.shape
+    vol = np.broadcast_to(np.asarray(vol, float), (n,))
+    tree = cKDTree(X) if tree is None else tree
+    k = min(n, 4**dim if k is None else k)
+    _, nb = tree.query(X, k=k)
+    nb = np.asarray(nb).reshape(n, k)
+    D = np.abs(X[nb] - X[:, None, :])  # (n, k, dim)
+    in_cone = (D >= D.max(axis=2, keepdims=True)) & (D > 0)
+    h = np.where(in_cone, D, np.inf).min(axis=1)  # (n, dim)
+    found = np.isfinite(h)
+    nf = found.sum(axis=1)
+    logh = np.where(found, np.log(np.where(found, h, 1.0)), 0.0)
+    # missing axes share what the found ones leave of the volume
+    miss = np.where(nf < dim, (np.log(vol) - logh.sum(axis=1)) / np.maximum(dim - nf, 1), 0.0)
+    logh = np.where(found, logh, miss[:, None])
+    logh += (np.log(vol) - logh.sum(axis=1))[:, None] / dim  # prod h = V
+    h = np.exp(logh)
+    none = nf == 0
+    h[none] = vol[none, None] ** (1.0 / dim)
+    return h
+
+
+def _in_cells(Xt, Xs, h, tree, rtol: float = 1e-6) -> np.ndarray:
+    """True for targets inside the union of the boxes |X - x_j| <= h_j / 2 (per axis)."""
+    Xt = np.atleast_2d(np.asarray(Xt, float))
+    if len(Xt) == 0:
+        return np.zeros(0, bool)
+    half = 0.5 * h * (1 + rtol)
+    cand = tree.query_ball_point(Xt, float(half.max()), p=np.inf)
+    lens = np.fromiter((len(c) for c in cand), np.int64, len(cand))
+    rows = np.repeat(np.arange(len(Xt)), lens)
+    cols = np.fromiter((j for c in cand for j in c), np.int64, int(lens.sum()))
+    ok = np.all(np.abs(Xt[rows] - Xs[cols]) <= half[cols], axis=1)
+    covered = np.zeros(len(Xt), bool)
+    covered[rows[ok]] = True
+    return covered
 
 
 def _kernel_shape(q: np.ndarray, kind: int) -> np.ndarray:

@@ -131,6 +131,39 @@ def test_mls_map_is_exact_for_linear_fields(dim):
     assert nr.covered.all() and np.array_equal(nr(T, 0.0), T[k])
 
 
+@pytest.mark.parametrize("spacing", [(1.0, 0.96), (1.0, 0.5), (0.4, 1.0), (1.0, 2.5),
+                                     (6.25, 6.25, 6.0), (1.0, 1.3, 0.7), (0.5, 1.0, 2.0)])
+def test_anisotropic_lattice_covers_every_node_of_its_region(spacing):
+    """Issue 14 bug 3: on a lattice with per-axis spacings s (the scenes' boxes: 6.25 um
+    laterally, 6.0 um vertically in the droplet scene) every target inside the particle
+    region [lo, hi] -- cell faces, region faces and corners, particle centres, random points
+    -- is covered and gets the mapped value (MLS: exact for a linear field); targets
+    outside keep T0.  The old isotropic cell V^(1/d) missed the nodes on lateral cell faces."""
+    s = np.array(spacing)
+    dim = s.size
+    counts = np.array([5, 4, 3][:dim])
+    lo = -0.5 * counts * s
+    hi = lo + counts * s
+    axes = [lo[a] + s[a] * (np.arange(counts[a]) + 0.5) for a in range(dim)]
+    Xp = np.stack([c.ravel() for c in np.meshgrid(*axes, indexing="ij")], axis=1)
+    vol = np.full(len(Xp), np.prod(s))
+    lines = [np.unique(np.r_[lo[a] + s[a] * np.arange(counts[a] + 1), axes[a],
+                             lo[a] - [0.3 * s[a], 2 * s[a]], hi[a] + [0.3 * s[a], 2 * s[a]]])
+             for a in range(dim)]
+    grid = np.stack([c.ravel() for c in np.meshgrid(*lines, indexing="ij")], axis=1)
+    rng = np.random.default_rng(3)
+    nodes = np.r_[grid, rng.uniform(lo - s, hi + s, (400, dim))]
+    inside = np.all((nodes >= lo - 1e-12) & (nodes <= hi + 1e-12), axis=1)
+    b = np.array([3.0, -2.0, 5.0])[:dim]
+    T = 300.0 + Xp @ b
+    tm = TemperatureMap(nodes, Xp, vol, 3 * s.max(), "mls")
+    assert np.array_equal(tm.covered, inside)
+    assert np.allclose(tm.cells, s, rtol=1e-12)
+    out = tm(T, 250.0)
+    assert np.abs(out[inside] - (300.0 + nodes[inside] @ b)).max() < 1e-9
+    assert np.all(out[~inside] == 250.0)
+
+
 # ------------------------------------------------------------------ fluid -> FEM
 def test_force_handed_over_equals_force_the_fluid_felt():
     """A water block dropping onto a wall floor: after some steps, sum of f_fluid on the
