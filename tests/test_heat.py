@@ -162,6 +162,41 @@ def test_ghost_placement_rod():
     assert np.all(g2.x[:, 0] > 1.0) and g2.n == 3
 
 
+def test_ghosts_of_a_block_shorter_than_the_period_are_its_open_ghosts_wrapped():
+    """Periodic x of length 20 dx, a block over x in [2, 12] dx (the gap of 8 dx > 2 R
+    straddles the cell's end x = 0 = 20 dx), faces insulated in x and Dirichlet in y: the
+    periodic placement gives the non-periodic ghosts wrapped into the cell, with the same
+    types and sources (the ghost beyond the xmin face at x = -0.5 dx sits at 19.5 dx and
+    still mirrors to 4.5 dx); a block filling the period gets ghosts only beyond y."""
+    dx = 0.05
+    gx = (np.arange(2, 12) + 0.5) * dx
+    gy = (np.arange(10) + 0.5) * dx
+    x = np.stack(np.meshgrid(gx, gy, indexing="ij"), axis=-1).reshape(-1, 2)
+    vol = np.full(x.shape[0], dx * dx)
+    bcs = {"ymin": ("dirichlet", 0.0), "ymax": ("dirichlet", 1.0)}
+    faces = box_faces([2 * dx, 0.0], [12 * dx, 0.5], bcs)
+    L = 20 * dx
+    g0 = place_ghosts(x, vol, dx, 3 * dx, faces)
+    gp = place_ghosts(x, vol, dx, 3 * dx, faces, period=(L, 0.0), lo=(0.0, 0.0))
+    assert gp.n == g0.n > 0 and (gp.x[:, 0] > 17 * dx).any()
+    assert np.all((gp.x[:, 0] >= 0.0) & (gp.x[:, 0] < L))
+    key0 = np.lexsort((g0.x[:, 1], np.mod(g0.x[:, 0], L)))
+    keyp = np.lexsort((gp.x[:, 1], gp.x[:, 0]))
+    np.testing.assert_allclose(np.mod(g0.x[key0, 0], L), gp.x[keyp, 0], atol=1e-12)
+    np.testing.assert_allclose(g0.x[key0, 1], gp.x[keyp, 1], atol=1e-12)
+    for f in ("type", "source", "face", "ratio"):
+        np.testing.assert_array_equal(getattr(g0, f)[key0], getattr(gp, f)[keyp])
+    # the same lattice filling the period: no ghost beyond a periodic end
+    gx = (np.arange(20) + 0.5) * dx
+    x = np.stack(np.meshgrid(gx, gy, indexing="ij"), axis=-1).reshape(-1, 2)
+    faces = box_faces([0.0, 0.0], [L, 0.5], bcs)
+    g = place_ghosts(x, np.full(x.shape[0], dx * dx), dx, 3 * dx, faces, period=(L, 0.0),
+                     lo=(0.0, 0.0))
+    assert g.n == 2 * 3 * 20 and np.all(g.type == DIRICHLET)
+    assert g.stats["low_density_particles"] == 2 * 20
+    assert np.all((g.x[:, 1] < 0.0) | (g.x[:, 1] > 0.5))
+
+
 def test_ghost_trim_removes_dense_ghosts_only():
     """Trimming removes ghosts whose number density exceeds eta_trim: a ghost continuing
     the lattice next to the body has density ~1 (kept at 1.3, removed at 0.9), the outer

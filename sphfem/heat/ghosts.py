@@ -31,6 +31,15 @@ Boundary conditions (sec. 2.3.3.2):
 
 A ghost beyond several faces (a corner) takes a Dirichlet face if any (the deepest one),
 otherwise it is insulated and mirrored across all of them.
+
+Periodic axes (``period[a] > 0``, the neighbour list's convention): the number densities of
+steps 1 and 2 use the minimum image, so a body that fills the period has no low-density
+particles at its periodic ends; candidates are wrapped into the periodic cell
+``[lo, lo + period)`` before the face tests, so a lattice point beyond a periodic end lands
+on a real particle (and is dropped) instead of becoming a ghost that the periodic search
+lays onto the particles of the opposite end.  Face depths and mirror distances along a
+periodic axis use the minimum image, so a block shorter than the period still gets its
+ghosts in the gap.
 """
 
 from __future__ import annotations
@@ -122,18 +131,55 @@ class Ghosts:
         return self.x.shape[0]
 
 
-def _beyond(p: np.ndarray, faces: list[Face], R: float) -> np.ndarray:
+def _min_image(d: np.ndarray, L: float) -> np.ndarray:
+    """Separation ``d`` wrapped into [-L/2, L/2) when ``L > 0`` (periodic axis), else ``d``."""
+    return d - L * np.floor(d / L + 0.5) if L > 0.0 else d
+
+
+def _wrap(p: np.ndarray, lo: np.ndarray, period: np.ndarray) -> np.ndarray:
+    """Positions wrapped into ``[lo, lo + period)`` on the periodic axes (a copy)."""
+    p = np.array(p, dtype=np.float64)
+    for a in np.flatnonzero(period > 0):
+        y = np.mod(p[:, a] - lo[a], period[a])
+        p[:, a] = lo[a] + np.where(y >= period[a], 0.0, y)
+    return p
+
+
+def _shifted(p: np.ndarray, lo: np.ndarray, period: np.ndarray) -> np.ndarray:
+    """Coordinates for a toroidal k-d tree: in [0, period) on the periodic axes."""
+    p = np.array(p, dtype=np.float64)
+    for a in np.flatnonzero(period > 0):
+        y = np.mod(p[:, a] - lo[a], period[a])
+        p[:, a] = np.where(y >= period[a], 0.0, y)
+    return p
+
+
+def _tree(x: np.ndarray, lo: np.ndarray, period: np.ndarray) -> cKDTree:
+    """k-d tree of ``x``, toroidal on the periodic axes (query it with :func:`_query`)."""
+    if not np.any(period > 0):
+        return cKDTree(x)
+    return cKDTree(_shifted(x, lo, period), boxsize=np.where(period > 0, period, 0.0))
+
+
+def _query(tree: cKDTree, p: np.ndarray, lo: np.ndarray, period: np.ndarray):
+    """Distance to and index of the point of ``tree`` (from :func:`_tree`) nearest each
+    row of ``p`` (minimum image on the periodic axes)."""
+    return tree.query(_shifted(p, lo, period) if np.any(period > 0) else p)
+
+
+def _beyond(p: np.ndarray, faces: list[Face], R: float, period=None) -> np.ndarray:
     """(n, nfaces) bool: point beyond face f (outside its plane by at most R, within its
     lateral extent enlarged by R) and penetration depth (n, nfaces).
 
     The depth limit keeps a face to its own neighbourhood: a point beyond one block's face
     is not also "beyond" the parallel face of another block far away (which would mirror
-    its source into that block)."""
+    its source into that block).  On a periodic axis the depth is the minimum image."""
     n = p.shape[0]
+    period = np.zeros(p.shape[1]) if period is None else period
     out = np.zeros((n, len(faces)), dtype=bool)
     depth = np.zeros((n, len(faces)))
     for f, face in enumerate(faces):
-        d = face.side * (p[:, face.axis] - face.position)
+        d = face.side * _min_image(p[:, face.axis] - face.position, period[face.axis])
         b = (d > 1e-12 * max(1.0, abs(face.position))) & (d <= R * (1.0 + 1e-12))
         for a in range(p.shape[1]):
             if a == face.axis:
@@ -148,7 +194,8 @@ def _beyond(p: np.ndarray, faces: list[Face], R: float) -> np.ndarray:
 
 
 def number_density(x, vol, R, kernel: str = "wendland_c2", period=None):
-    """n_i = sum_j V_j W_ij (self included): 1 inside a uniform body, about 1/2 at a face."""
+    """n_i = sum_j V_j W_ij (self included): 1 inside a uniform body, about 1/2 at a face;
+    minimum image on the axes with ``period > 0``."""
     kind = kernels.kernel_code(kernel)
     dim = x.shape[1]
     sigma = kernels.kernel_sigma(kind, dim, R)
@@ -188,13 +235,16 @@ def _owner_mask(p: np.ndarray, faces: list[Face]) -> np.ndarray:
 
 def place_ghosts(x, vol, dx: float, R: float, faces: list[Face], *, kernel="wendland_c2",
                  eta_place: float = 0.85, eta_trim: float = 1.3, origin=None,
-                 neumann_source: str = "mirror") -> Ghosts:
+                 neumann_source: str = "mirror", period=None, lo=None) -> Ghosts:
     """Algorithm 2.5: ghosts on the lattice ``origin + dx * integer`` beyond the faces.
 
     ``x`` (n, dim) and ``vol`` are the real particles; ``origin`` defaults to the first
-    particle's position (the lattice the particles were generated on).  Returns
-    :class:`Ghosts` with ``source`` indexing ``x``; ``stats`` counts the particles with low
-    density, the candidates and the trimmed ghosts.
+    particle's position (the lattice the particles were generated on).  ``period`` (dim,)
+    is the periodic length per axis (0: open) and ``lo`` the lower corner of the periodic
+    cell (default: the cell centred on the particles); no ghost is placed across a periodic
+    axis (module docstring).  Returns :class:`Ghosts` with ``source`` indexing ``x`` and
+    positions inside the periodic cell; ``stats`` counts the particles with low density,
+    the candidates and the trimmed ghosts.
     """
     if neumann_source not in NEUMANN_SOURCES:
         raise ValueError(f"neumann_source must be one of {NEUMANN_SOURCES}")
@@ -202,7 +252,13 @@ def place_ghosts(x, vol, dx: float, R: float, faces: list[Face], *, kernel="wend
     vol = np.ascontiguousarray(vol, dtype=np.float64)
     n, dim = x.shape
     origin = x[0] if origin is None else np.asarray(origin, float)
-    dens = number_density(x, vol, R, kernel)
+    period = (np.zeros(dim) if period is None
+              else np.broadcast_to(np.asarray(period, float), (dim,)).copy())
+    periodic = bool(np.any(period > 0))
+    if lo is None:
+        lo = 0.5 * (x.min(0) + x.max(0) - period)
+    lo = np.broadcast_to(np.asarray(lo, float), (dim,)).copy()
+    dens = number_density(x, vol, R, kernel, period)
     low = np.flatnonzero(dens < eta_place)
     stats = {"low_density_particles": int(low.size)}
     empty = Ghosts(np.zeros((0, dim)), np.zeros(0, np.int8), np.zeros(0, np.int64),
@@ -219,14 +275,18 @@ def place_ghosts(x, vol, dx: float, R: float, faces: list[Face], *, kernel="wend
     near = np.linalg.norm(pts - np.repeat(x[low], stencil.shape[0], axis=0), axis=1)
     idx = np.unique(idx[near <= R * (1 + 1e-12)], axis=0)
     pts = origin + dx * idx
-    beyond, depth = _beyond(pts, faces, R)
+    if periodic:  # into the periodic cell; images of one point reached from both ends: once
+        pts = _wrap(pts, lo, period)
+        pairs = _tree(pts, lo, period).query_pairs(0.5 * dx, output_type="ndarray")
+        pts = np.delete(pts, np.unique(pairs.max(axis=1)), axis=0)
+    beyond, depth = _beyond(pts, faces, R, period)
     owner = _owner_mask(pts, faces)
     beyond &= owner
     depth = np.where(owner, depth, 0.0)
     is_free = np.array([f.bc == "free" for f in faces])
     keep = beyond.any(axis=1) & ~(beyond & is_free).any(axis=1)
-    tree = cKDTree(x)
-    dist, _ = tree.query(pts)
+    tree = _tree(x, lo, period)
+    dist, _ = _query(tree, pts, lo, period)
     keep &= dist > 0.5 * dx
     pts, beyond, depth = pts[keep], beyond[keep], depth[keep]
     stats["candidates"] = int(pts.shape[0])
@@ -235,7 +295,7 @@ def place_ghosts(x, vol, dx: float, R: float, faces: list[Face], *, kernel="wend
     # trim: number density over real + candidate ghosts
     gvol = np.full(pts.shape[0], dx**dim)
     dens_all = number_density(np.concatenate([x, pts]), np.concatenate([vol, gvol]), R,
-                              kernel)
+                              kernel, period)
     keep = dens_all[n:] <= eta_trim
     stats["trimmed"] = int((~keep).sum())
     pts, beyond, depth = pts[keep], beyond[keep], depth[keep]
@@ -256,19 +316,20 @@ def place_ghosts(x, vol, dx: float, R: float, faces: list[Face], *, kernel="wend
         f_a = np.argmax(d_a, axis=1)
         sel = d_a[np.arange(pts.shape[0]), f_a] > 0.0
         plane = np.array([fc.position for fc in faces])[f_a[sel]]
-        mirror[sel, a] = 2.0 * plane - pts[sel, a]
+        mirror[sel, a] = (2.0 * plane - pts[sel, a] if period[a] == 0.0
+                          else plane - _min_image(pts[sel, a] - plane, period[a]))
     if neumann_source == "nearest":
         target = np.where((gtype == INSULATED)[:, None], pts, mirror)
     else:
         target = mirror
-    _, source = tree.query(target)
+    _, source = _query(tree, target, lo, period)
     # antisymmetric Dirichlet: T_g = T_w - r (T_s - T_w), r = d_g / d_s (depth of the ghost
     # beyond, and of its source inside, the Dirichlet face): exact for T linear along the
     # normal also when the real particles are off the lattice (r = 1 on it); r <= R_MAX
     ratio = np.ones(pts.shape[0])
     for q in np.flatnonzero(gtype == DIRICHLET):
         fc = faces[face[q]]
-        d_s = fc.side * (fc.position - x[source[q], fc.axis])
+        d_s = fc.side * _min_image(fc.position - x[source[q], fc.axis], period[fc.axis])
         ratio[q] = min(depth[q, face[q]] / max(d_s, 1e-12), R_MAX)
     stats["ghosts"] = int(pts.shape[0])
     stats["dirichlet"] = int((gtype == DIRICHLET).sum())

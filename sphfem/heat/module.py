@@ -1,10 +1,10 @@
 """``HeatConduction``: the ``heat`` physics module (protocol of :mod:`sphfem.physics`).
 
 On ``init`` it reads c and k per material, places ghost particles for the scene's
-boundaries (algorithm 2.5) and appends them to the particle set as kind GHOST (the
-neighbour list is rebuilt once), builds the conduction system and its stepper: explicit
-Heun at ``cfl`` times the stable step, or the theta method at ``dt`` or
-``implicit_dt_factor`` times it.  ``diagnostics`` reports the explicit limit, the
+boundaries (algorithm 2.5; none across the domain's periodic axes) and appends them to the
+particle set as kind GHOST (the neighbour list is rebuilt once), builds the conduction
+system and its stepper: explicit Heun at ``cfl`` times the stable step, or the theta method
+at ``dt`` or ``implicit_dt_factor`` times it.  ``diagnostics`` reports the explicit limit, the
 fallbacks of the corrected operator, the ghost counts and the energy ledger (drift and
 balance).
 
@@ -73,7 +73,7 @@ class HeatConduction(PhysicsModule):
         dx = float(np.median(ps.vol)) ** (1.0 / ps.dim)
         gh = place_ghosts(ps.x, ps.vol, dx, sim.R, faces, eta_place=prm.eta_place,
                           eta_trim=prm.eta_trim, neumann_source=prm.insulated_source,
-                          kernel=_kernel_name(sim.kind))
+                          kernel=_kernel_name(sim.kind), period=sim.period, lo=sim.lo)
         if gh.n:
             s = gh.source
             g = ParticleSet.from_arrays(gh.x, m=ps.m[s], rho=ps.rho[s], kind=GHOST,

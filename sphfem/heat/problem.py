@@ -108,10 +108,12 @@ def build_problem(x, vol, rho, c, k, T0, dx: float, boundaries=(), *,
                   support_factor: float = 3.0, eta_place: float = 0.85,
                   eta_trim: float = 1.3, dirichlet_ghosts: str = "antisymmetric",
                   insulated_source: str = "mirror", origin=None, held=None,
-                  free_surface_plain: float = 0.85) -> HeatProblem:
+                  free_surface_plain: float = 0.85, period=None, lo=None) -> HeatProblem:
     """Place ghosts for ``boundaries`` around the real particles ``x`` (n, dim) and build
     the conduction system.  ``rho`` [kg/m^3], ``c`` [J/(kg K)], ``k`` [W/(m K)], ``T0`` [K]
     are per particle or scalars; ``held`` marks real particles whose T stays fixed.
+    ``period`` (dim,) makes axes periodic (length > 0; 0 = open) with the periodic cell
+    starting at ``lo`` (see :func:`~sphfem.heat.ghosts.place_ghosts`).
 
     With the corrected Laplacian, particles near a free face or with number density (ghosts
     counted) below ``free_surface_plain`` use the plain rows (:func:`free_surface_rows`)."""
@@ -123,8 +125,11 @@ def build_problem(x, vol, rho, c, k, T0, dx: float, boundaries=(), *,
     vol, rho, c, k, T0 = bc
     R = support_factor * dx
     faces = faces_of(boundaries)
+    period = (np.zeros(dim) if period is None
+              else np.broadcast_to(np.asarray(period, float), (dim,)).copy())
     gh = place_ghosts(x, vol, dx, R, faces, kernel=kernel, eta_place=eta_place,
-                      eta_trim=eta_trim, origin=origin, neumann_source=insulated_source)
+                      eta_trim=eta_trim, origin=origin, neumann_source=insulated_source,
+                      period=period, lo=lo)
     s = gh.source
     xa = np.ascontiguousarray(np.concatenate([x, gh.x]))
     va = np.concatenate([vol, vol[s]])
@@ -135,7 +140,6 @@ def build_problem(x, vol, rho, c, k, T0, dx: float, boundaries=(), *,
     na = xa.shape[0]
     kind = kernels.kernel_code(kernel)
     sigma = kernels.kernel_sigma(kind, dim, R)
-    period = np.zeros(dim)
     nl = build_neighbor_list(xa, R, xa.min(0) - R, xa.max(0) + R, period)
     active = np.zeros(na, dtype=bool)
     active[:n] = True
