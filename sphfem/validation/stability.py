@@ -3,11 +3,20 @@
 Every row is a complete scene (built here as a dict, run by the ordinary driver into its own
 folder) and ends in one of three verdicts:
 
-* ``stable``: the run reached ``t_end`` with every state finite and its row checks met;
-* ``stopped cleanly``: a guard stopped it with a reason (the message is reported), every
-  file it wrote is finite, and stopping is acceptable for that row;
-* ``FAILED``: a crash (an exception other than a guard's), non-finite numbers in any
-  written file, a row check missed, or a stop where the row must run through.
+* ``stable``: the run reached ``t_end`` and every check of the row passed;
+* ``stopped cleanly``: a guard stopped it, and every check passed: the stop was expected
+  (or allowed) for the row, the message names the guard the row expects, a required stop
+  came by a bounded step, every written file is finite, and the state before the stopping
+  step passed the row's physics checks;
+* ``FAILED``: a crash (an exception other than a guard's), a stop where the row must run
+  through, a run through where the row must stop, or any check missed.
+
+Checks run after a stop as well, on the state before the stopping step (kept by
+:class:`_Recorder`); a figure that is missing counts as a failed check, never as zero.
+Every row has checks that can fail: besides its own physics checks (energy ledger,
+maximum principle, mechanical energy of the fluid, force balance, stress scale, the dt
+cap), every row scans all the files it wrote (particle and substrate VTU, probe CSV, JSON,
+checkpoint) for NaN/Inf.
 
 Figures per row come from the run's ``summary.json``: steps, smallest dt and the limit that
 set it, steps above the stable limit, max speed over c0, the density band rho/rho0, the
@@ -33,7 +42,9 @@ from __future__ import annotations
 
 import copy
 import json
+import logging
 import math
+import re
 import tempfile
 import time
 from collections.abc import Callable
@@ -44,6 +55,33 @@ import numpy as np
 
 STABLE, STOPPED, FAILED = "stable", "stopped cleanly", "FAILED"
 
+log = logging.getLogger(__name__)
+
+
+#: what a row's run must do (``Row.expect``)
+EITHER = "stable or stopped"
+
+
+@dataclass
+class Outcome:
+    """What a row's checks see: the summary, the output folder, how the run ended, the
+    state at the first step and the ``final`` state (the end state of a run that reached
+    ``t_end``; the state before the stopping step of a stopped run), the scene dict and the
+    stable dt limit measured for ``dt_factor`` rows (else None)."""
+
+    summary: dict
+    folder: Path
+    stopped: bool
+    message: str
+    initial: dict
+    final: dict
+    scene: dict
+    stable_limit: float | None = None
+
+
+#: a check: fn(outcome) -> (value or None when the figure is missing, limit, op)
+Check = Callable[[Outcome], tuple[float | None, float, str]]
+
 
 @dataclass
 class Row:
@@ -52,10 +90,15 @@ class Row:
     name: str
     description: str
     build: Callable[[bool], dict]
-    #: verdicts that pass: (STABLE,) when the scene must run through, else (STABLE, STOPPED)
-    allowed: tuple[str, ...] = (STABLE, STOPPED)
-    #: extra checks on the summary: name -> fn(summary) -> (value, limit, op)
-    checks: dict[str, Callable[[dict], tuple[float, float, str]]] = field(default_factory=dict)
+    #: STABLE: must reach t_end; STOPPED: a guard must stop it; EITHER: both pass
+    expect: str = STABLE
+    #: regular expression the stop message must match (the guard the row expects to fire);
+    #: required when a stop is allowed
+    guard: str | None = None
+    #: a required stop must come at or before this step
+    max_stop_step: int | None = None
+    #: the row's physics checks, evaluated on every run, stopped or not
+    checks: dict[str, Check] = field(default_factory=dict)
     #: run the scene once without a fixed dt to measure the stable limit, then set
     #: ``time.dt = dt_factor * limit`` (and ``cap_dt``)
     dt_factor: float | None = None
@@ -219,107 +262,217 @@ def rest_fluid_scene(quick: bool) -> dict:
 
 
 # --------------------------------------------------------------------------------------
-# row checks
+# row checks: fn(outcome) -> (value, limit, op); value None when the figure is missing
 
 
 def _heat(s: dict) -> dict:
     return s.get("diagnostics", {}).get("heat", {})
 
 
-def _energy_balance(s: dict) -> tuple[float, float, str]:
-    """|E - E0 - heat through the boundaries| / E of the heat ledger (Cleary form)."""
-    return abs(_heat(s).get("energy_balance_residual_rel", math.nan)), 1e-10, "<="
+def _energy_balance(o: Outcome) -> tuple[float | None, float, str]:
+    """|E - E0 - heat through the boundaries| / E of the heat ledger (Cleary form: 0 to
+    round-off, whatever the step, so it also holds for a stopped run)."""
+    r = _heat(o.summary).get("energy_balance_residual_rel")
+    return (None if r is None else abs(r)), 1e-10, "<="
 
 
-def _max_principle(lo: float, hi: float, slack: float = 1e-9):
-    """T stays inside the initial/wall range [lo, hi] (to ``slack`` of its width)."""
+def _T_bounds(o: Outcome) -> tuple[float, float] | None:
+    """The maximum-principle range: initial temperatures of the non-ghost particles and the
+    temperatures held on Dirichlet faces (conduction cannot leave it)."""
+    from sphfem.particles import GHOST
 
-    def check(s: dict) -> tuple[float, float, str]:
-        r = _heat(s).get("T_range_K", [math.nan, math.nan])
-        over = max(lo - r[0], r[1] - hi) / (hi - lo)
-        return over, slack, "<="
+    T, kind = o.initial.get("T"), o.initial.get("kind")
+    if T is None or kind is None or not np.any(kind != GHOST):
+        return None
+    held = [b["temperature"] for b in o.scene.get("heat", {}).get("boundaries", [])
+            if b.get("condition") == "dirichlet"]
+    T0 = T[kind != GHOST]
+    return min([float(T0.min()), *held]), max([float(T0.max()), *held])
+
+
+def _max_principle(slack: float = 1e-9) -> Check:
+    """Largest excursion of a non-ghost temperature of the final state beyond the
+    maximum-principle range, over the range's width, at most ``slack``."""
+
+    def check(o: Outcome) -> tuple[float | None, float, str]:
+        from sphfem.particles import GHOST
+
+        b, T, kind = _T_bounds(o), o.final.get("T"), o.final.get("kind")
+        if b is None or T is None or kind is None:
+            return None, slack, "<="
+        T = T[kind != GHOST]
+        lo, hi = b
+        if not np.isfinite(T).all():
+            return math.inf, slack, "<="
+        return max(lo - float(T.min()), float(T.max()) - hi, 0.0) / (hi - lo), slack, "<="
 
     return check
 
 
-def _force_balance(s: dict) -> tuple[float, float, str]:
-    c = s.get("diagnostics", {}).get("coupling", {})
-    return c.get("force_residual_rel_max", math.nan) or 0.0, 1e-6, "<="
+def _bound_margin(o: Outcome) -> float:
+    """The heat guard's margin (``heat.bound_margin``, default 0.1) of the scene."""
+    from sphfem.heat.params import HeatParams
+
+    return float(o.scene.get("heat", {}).get("bound_margin", HeatParams.bound_margin))
 
 
-def _thermal_stress_scale(E: float, nu: float, alpha: float, dT: float):
+def _within_guard_band(o: Outcome) -> tuple[float | None, float, str]:
+    """:func:`_max_principle` with the heat guard's own margin as the limit: a state the
+    guard accepted stays within it (fails when the guard fires late or not at all)."""
+    value, _, op = _max_principle()(o)
+    return value, _bound_margin(o), op
+
+
+def _mechanical_energy(state: dict, gravity) -> tuple[float, float] | None:
+    """(kinetic, potential) energy sum 1/2 m |v|^2 and -sum m g.x of the fluid particles."""
+    from sphfem.particles import FLUID
+
+    if any(state.get(k) is None for k in ("x", "v", "m", "kind")):
+        return None
+    f = state["kind"] == FLUID
+    if not f.any():
+        return None
+    m, v, x = state["m"][f], state["v"][f], state["x"][f]
+    g = np.zeros(x.shape[1]) if gravity is None else np.asarray(gravity, float)[: x.shape[1]]
+    return 0.5 * float(np.sum(m * np.sum(v * v, axis=1))), -float(np.sum(m * (x @ g)))
+
+
+def _energy_gain(tol: float = 1e-2) -> Check:
+    """Gain of the fluid's kinetic plus potential energy from the first step to the final
+    state, over the larger kinetic energy of the two: no source feeds it (static walls,
+    p(rho0) = 0 at the start so the stored compression energy only grows, viscosity and
+    the density diffusion dissipate), so a gain beyond the integrator's error ``tol``
+    means the step pumps energy in."""
+
+    def check(o: Outcome) -> tuple[float | None, float, str]:
+        g = o.scene.get("fluid", {}).get("gravity")
+        e0, e1 = _mechanical_energy(o.initial, g), _mechanical_energy(o.final, g)
+        if e0 is None or e1 is None:
+            return None, tol, "<="
+        gain = sum(e1) - sum(e0)
+        scale = max(e0[0], e1[0])
+        if not math.isfinite(gain):
+            return math.inf, tol, "<="
+        return (gain / scale if scale > 0 else (0.0 if gain == 0 else math.inf)), tol, "<="
+
+    return check
+
+
+def _force_balance(o: Outcome) -> tuple[float | None, float, str]:
+    """Largest |sum of the sensor forces - sum of the substrate's nodal loads| / |sum| over
+    the coupling solves (missing: no solve happened, a failure)."""
+    c = o.summary.get("diagnostics", {}).get("coupling", {})
+    return c.get("force_residual_rel_max"), 1e-6, "<="
+
+
+def _thermal_stress_scale(E: float, nu: float, alpha: float, dT: float) -> Check:
     """Peak von Mises over E alpha dT / (1 - nu), the stress of a fully restrained layer
     (plane biaxial); a sound linear solution stays within a small multiple of it."""
 
-    def check(s: dict) -> tuple[float, float, str]:
-        vm = s.get("diagnostics", {}).get("coupling", {}).get("peak_von_mises_Pa")
-        return (vm if vm is not None else math.nan) / (E * alpha * dT / (1 - nu)), 2.0, "<="
+    def check(o: Outcome) -> tuple[float | None, float, str]:
+        vm = o.summary.get("diagnostics", {}).get("coupling", {}).get("peak_von_mises_Pa")
+        return (None if vm is None else vm / (E * alpha * dT / (1 - nu))), 2.0, "<="
 
     return check
+
+
+def _dt_capped(o: Outcome) -> tuple[float | None, float, str]:
+    """Largest step over the stable limit of a scene whose particles do not move (the limit
+    is that of t = 0 throughout): the cap must keep it at 1."""
+    dt_max = o.summary.get("dt", {}).get("max")
+    if dt_max is None or o.stable_limit is None:
+        return None, 1.0 + 1e-12, "<="
+    return dt_max / o.stable_limit, 1.0 + 1e-12, "<="
+
+
+def _growth_steps(dt_factor: float, margin: float = 0.1, eps: float = 1e-16) -> int:
+    """Steps a mode needs to grow from round-off ``eps`` to ``margin`` (the guards' band)
+    when amplified by g = 2 f - 1 per step: forward Euler's fastest mode at f times the
+    limit, the slowest growth among the explicit schemes used here (Heun's is
+    1 - 2f + 2f^2 >= 2f - 1).  A required stop must come by this step; from a
+    discontinuous start the mode begins far above round-off, so the guard fires sooner."""
+    return math.ceil(math.log(margin / eps) / math.log(2.0 * dt_factor - 1.0))
+
+
+HEAT_GUARD = r"^heat stopped at step \d+.*temperature outside"
+FLUID_GUARD = r"^fluid stopped at step \d+.*(density ratio|speed above)"
+FLUID_CHECKS = {"fluid energy gain (dE / KE)": _energy_gain()}
+HEAT_CHECKS = {"max principle (overshoot / range)": _max_principle()}
+CLEARY_CHECKS = {**HEAT_CHECKS, "energy balance |rel|": _energy_balance}
 
 
 ROWS: list[Row] = [
     Row("stiff-substrate-300GPa", "50 m/s water droplet (100 C) onto a 300 GPa substrate, "
-        "fluid + heat + FEM coupling", lambda q: droplet_scene(q), (STABLE,),
-        {"energy balance |rel|": _energy_balance, "sensor/FEM force balance": _force_balance}),
+        "fluid + heat + FEM coupling", lambda q: droplet_scene(q), STABLE,
+        checks={**CLEARY_CHECKS, **FLUID_CHECKS, "sensor/FEM force balance": _force_balance}),
     Row("stiff-substrate-300GPa-tlsph", "the same onto a 300 GPa TL-SPH substrate "
-        "(quasi-static relaxation)", tlsph_substrate_scene, (STABLE,),
-        {"energy balance |rel|": _energy_balance, "sensor/solid force balance": _force_balance}),
+        "(quasi-static relaxation)", tlsph_substrate_scene, STABLE,
+        checks={**CLEARY_CHECKS, **FLUID_CHECKS,
+                "sensor/solid force balance": _force_balance}),
     Row("impact-100mps", "100 m/s impact, c0 = 1000 m/s (10x the speed)",
-        lambda q: droplet_scene(q, speed=100.0, modules=("fluid", "heat")), (STABLE,),
-        {"energy balance |rel|": _energy_balance}),
-    Row("impact-100mps-mach0.2", "100 m/s impact with c0 = 500 m/s (Mach 0.2: the guard may "
-        "stop it)", lambda q: droplet_scene(q, speed=100.0, c0=500.0, modules=("fluid",))),
+        lambda q: droplet_scene(q, speed=100.0, modules=("fluid", "heat")), STABLE,
+        checks={**CLEARY_CHECKS, **FLUID_CHECKS}),
+    Row("impact-100mps-mach0.2", "100 m/s impact with c0 = 500 m/s (Mach 0.2: the density "
+        "guard may stop it)", lambda q: droplet_scene(q, speed=100.0, c0=500.0,
+                                                      modules=("fluid",)),
+        EITHER, FLUID_GUARD, checks=FLUID_CHECKS),
     Row("thermal-shock-1000K", "droplet at 1293 K resting on a 293 K substrate: heat + FEM "
         "thermal stress", lambda q: droplet_scene(q, speed=0.0, T_drop=1293.15,
-                                                  modules=("heat", "coupling")), (STABLE,),
-        {"energy balance |rel|": _energy_balance,
-         "max principle (overshoot / range)": _max_principle(293.15, 1293.15),
-         "peak von Mises / (E alpha dT/(1-nu))": _thermal_stress_scale(300e9, 0.21, 8.1e-6,
-                                                                       1000.0)}),
+                                                  modules=("heat", "coupling")), STABLE,
+        checks={**CLEARY_CHECKS,
+                "peak von Mises / (E alpha dT/(1-nu))": _thermal_stress_scale(
+                    300e9, 0.21, 8.1e-6, 1000.0)}),
     Row("contrast-1e4-cleary", "conductivity contrast 1e4, explicit, Cleary Laplacian",
-        lambda q: contrast_scene(q), (STABLE,),
-        {"max principle (overshoot / range)": _max_principle(300.0, 400.0),
-         "energy balance |rel|": _energy_balance}),
+        lambda q: contrast_scene(q), STABLE, checks=CLEARY_CHECKS),
     Row("contrast-1e4-corrected", "conductivity contrast 1e4, explicit, corrected Laplacian",
-        lambda q: contrast_scene(q, laplacian="fatehi_manzari"), (STABLE,)),
+        lambda q: contrast_scene(q, laplacian="fatehi_manzari"), STABLE, checks=HEAT_CHECKS),
     Row("contrast-1e4-implicit", "conductivity contrast 1e4, backward Euler at 50x the "
-        "explicit step", lambda q: contrast_scene(q, implicit=True), (STABLE,),
-        {"max principle (overshoot / range)": _max_principle(300.0, 400.0),
-         "energy balance |rel|": _energy_balance}),
+        "explicit step", lambda q: contrast_scene(q, implicit=True), STABLE,
+        checks=CLEARY_CHECKS),
     Row("viscosity-1000x", "50 m/s droplet with 1e3 x water's viscosity (0.3 Pa s)",
-        lambda q: droplet_scene(q, mu_factor=1e3, modules=("fluid", "heat")), (STABLE,),
-        {"energy balance |rel|": _energy_balance}),
+        lambda q: droplet_scene(q, mu_factor=1e3, modules=("fluid", "heat")), STABLE,
+        checks={**CLEARY_CHECKS, **FLUID_CHECKS}),
     Row("disordered-20pct", "50 m/s droplet, every particle moved randomly by up to 0.2 dx, "
         "corrected Laplacian", lambda q: droplet_scene(q, jitter=0.2, modules=("fluid", "heat"),
-                                                       laplacian="fatehi_manzari"), (STABLE,)),
+                                                       laplacian="fatehi_manzari"), STABLE,
+        checks={**HEAT_CHECKS, **FLUID_CHECKS}),
     Row("disordered-20pct-heat", "conductivity contrast 1e4 on particles moved randomly by "
         "up to 0.2 dx, corrected Laplacian", lambda q: contrast_scene(
-            q, laplacian="fatehi_manzari", jitter=0.2), (STABLE,)),
+            q, laplacian="fatehi_manzari", jitter=0.2), STABLE, checks=HEAT_CHECKS),
     Row("isolated-and-sheets", "lone particles and one-particle-thick sheets (fluid falling, "
-        "solid conducting with the corrected Laplacian)", sheets_scene, (STABLE,),
-        {"energy balance |rel|": _energy_balance}),
+        "solid conducting with the corrected Laplacian)", sheets_scene, STABLE,
+        checks={**HEAT_CHECKS, "energy balance |rel|": _energy_balance, **FLUID_CHECKS}),
     Row("heat-dt-0.9x", "explicit heat at a fixed dt of 0.9x the stable limit",
-        rest_heat_scene, (STABLE,),
-        {"max principle (overshoot / range)": _max_principle(293.15, 373.15),
-         "energy balance |rel|": _energy_balance},
-        dt_factor=0.9, cap_dt=False),
+        rest_heat_scene, STABLE, checks=CLEARY_CHECKS, dt_factor=0.9, cap_dt=False),
     Row("heat-dt-2x-capped", "explicit heat asked for 2x the stable limit (the driver caps it)",
-        rest_heat_scene, (STABLE,),
-        {"max principle (overshoot / range)": _max_principle(293.15, 373.15)},
+        rest_heat_scene, STABLE, checks={**CLEARY_CHECKS, "dt max / stable limit": _dt_capped},
         dt_factor=2.0, cap_dt=True),
-    Row("heat-dt-2x", "explicit heat forced to 2x the stable limit (cap_dt = false)",
-        rest_heat_scene, dt_factor=2.0, cap_dt=False),
+    Row("heat-dt-2x", "explicit heat forced to 2x the stable limit (cap_dt = false; the "
+        "checkerboard mode may not outgrow the guard's band before t_end)", rest_heat_scene,
+        EITHER, HEAT_GUARD, checks={"energy balance |rel|": _energy_balance,
+                                    "T within the guard band (overshoot / range)":
+                                        _within_guard_band},
+        dt_factor=2.0, cap_dt=False),
     Row("heat-dt-8x", "explicit heat forced to 8x the stable limit (cap_dt = false)",
-        rest_heat_scene, dt_factor=8.0, cap_dt=False),
-    Row("fluid-dt-0.9x", "droplet impact at a fixed dt of 0.9x the initial stable limit",
-        rest_fluid_scene, dt_factor=0.9, cap_dt=False),
+        rest_heat_scene, STOPPED, HEAT_GUARD, _growth_steps(8.0),
+        checks={"energy balance |rel|": _energy_balance,
+                "T within the guard band (overshoot / range)": _within_guard_band},
+        dt_factor=8.0, cap_dt=False),
+    Row("fluid-dt-0.9x", "droplet impact at a fixed dt of 0.9x the initial stable limit "
+        "(the limit shrinks during the impact: the guard may stop it)", rest_fluid_scene,
+        EITHER, FLUID_GUARD, checks=FLUID_CHECKS, dt_factor=0.9, cap_dt=False),
     Row("fluid-dt-2x-capped", "droplet impact asked for 2x the stable limit (capped)",
-        rest_fluid_scene, (STABLE,), dt_factor=2.0, cap_dt=True),
+        rest_fluid_scene, STABLE, checks=FLUID_CHECKS, dt_factor=2.0, cap_dt=True),
     Row("fluid-dt-2x", "droplet impact forced to 2x the stable limit (cap_dt = false)",
-        rest_fluid_scene, dt_factor=2.0, cap_dt=False),
+        rest_fluid_scene, EITHER, FLUID_GUARD, checks=FLUID_CHECKS, dt_factor=2.0,
+        cap_dt=False),
+    # the state the guard accepted last is checked for sanity, not accuracy: an unstable
+    # step pumps energy in (2 % in the 4 steps before the density guard fires, quick), and
+    # the guard must stop the run before the gain reaches a tenth of the kinetic energy
     Row("fluid-dt-8x", "droplet impact forced to 8x the stable limit (cap_dt = false)",
-        rest_fluid_scene, dt_factor=8.0, cap_dt=False),
+        rest_fluid_scene, STOPPED, FLUID_GUARD, _growth_steps(8.0),
+        checks={"fluid energy gain before the stop (dE / KE)": _energy_gain(0.1)},
+        dt_factor=8.0, cap_dt=False),
 ]
 
 
@@ -341,17 +494,157 @@ def _stable_limit(data: dict) -> tuple[float, str]:
 
 
 def _nonfinite_files(folder: Path) -> list[str]:
-    """Written VTU files holding NaN/Inf anywhere in their points or data."""
-    import meshio
-
+    """Written files holding NaN or Inf: VTU (points, point, cell and field data), CSV
+    (every numeric cell), JSON (every number) and NPZ (every float array)."""
     bad = []
-    for f in sorted(folder.rglob("*.vtu")):
-        m = meshio.read(f)
-        arrays = [m.points, *m.point_data.values()]
-        arrays += [a for v in m.cell_data.values() for a in v]
-        if not all(np.isfinite(np.asarray(a, float)).all() for a in arrays):
+    for f in sorted(p for p in Path(folder).rglob("*") if p.is_file()):
+        try:
+            finite = _file_finite(f)
+        except Exception as e:  # an unreadable result file is as bad as a NaN in it
+            finite = False
+            log.warning("stability: cannot read %s: %s", f, e)
+        if finite is False:
             bad.append(str(f.relative_to(folder)))
     return bad
+
+
+def _file_finite(f: Path) -> bool | None:
+    """True/False for the formats :func:`_nonfinite_files` reads, None for others."""
+    suffix = f.suffix.lower()
+    if suffix == ".vtu":
+        import meshio
+
+        m = meshio.read(f)
+        arrays = [m.points, *m.point_data.values(), *m.field_data.values()]
+        arrays += [a for v in m.cell_data.values() for a in v]
+        return all(_finite(a) for a in arrays)
+    if suffix == ".csv":
+        import csv
+
+        with open(f, newline="") as fh:
+            for row in csv.reader(fh):
+                for cell in row:
+                    try:
+                        x = float(cell)
+                    except ValueError:
+                        continue
+                    if not math.isfinite(x):
+                        return False
+        return True
+    if suffix == ".json":
+        return _json_finite(json.loads(f.read_text()))
+    if suffix == ".npz":
+        with np.load(f) as z:
+            return all(_finite(z[k]) for k in z.files)
+    return None
+
+
+def _finite(a) -> bool:
+    a = np.asarray(a)
+    return a.dtype.kind not in "fc" or bool(np.isfinite(a).all())
+
+
+def _json_finite(o) -> bool:
+    if isinstance(o, float):
+        return math.isfinite(o)
+    if isinstance(o, dict):
+        return all(_json_finite(v) for v in o.values())
+    if isinstance(o, list):
+        return all(_json_finite(v) for v in o)
+    return True
+
+
+class _Recorder:
+    """Wraps ``sim.step``: keeps the state before the first step (after the modules' set-up,
+    ghosts included) and the state before the latest step, so that the checks of a
+    stopped run see the last state the guards accepted."""
+
+    KEYS = ("x", "v", "m", "T", "kind")
+
+    def __init__(self, sim):
+        self.sim, self._step = sim, sim.step
+        self.initial: dict = {}
+        self.before: dict = {}
+        sim.step = self
+
+    def state(self) -> dict:
+        f = self.sim.particles.fields
+        return {k: np.array(f[k]) for k in self.KEYS if k in f}
+
+    def __call__(self, dt: float) -> None:
+        self.before = self.state()
+        if not self.initial:
+            self.initial = self.before
+        self._step(dt)
+
+
+def _evaluate(row: Row, o: Outcome) -> tuple[dict, list[str]]:
+    """Every check of ``row`` on ``o``, with the common ones; returns (checks, failures)."""
+    checks: dict[str, Check] = {"non-finite files written": lambda _: (
+        float(len(_nonfinite_files(o.folder))), 0.0, "<=")}
+    if o.stopped and row.expect in (STOPPED, EITHER):
+        pattern = row.guard or r"(?!)"
+        checks["stopped by the expected guard"] = lambda _: (
+            1.0 if re.search(pattern, o.message) else 0.0, 1.0, ">=")
+    if row.expect == STOPPED:
+        checks["stop step"] = lambda _: (
+            float(o.summary.get("steps", math.nan) + 1) if o.stopped else None,
+            float(row.max_stop_step or 0), "<=")
+    checks.update(row.checks)
+    out, failures = {}, []
+    for name, fn in checks.items():
+        try:
+            value, limit, op = fn(o)
+        except Exception as e:  # a check that cannot be evaluated fails, with the reason
+            value, limit, op = None, math.nan, "<="
+            log.warning("stability: check %r of %s raised %s", name, row.name, e)
+        ok = value is not None and not math.isnan(value) and (
+            value <= limit if op == "<=" else value >= limit)
+        out[name] = {"value": value, "limit": limit, "op": op, "passed": bool(ok)}
+        if not ok:
+            failures.append(f"{name}: {_g(value)} not {op} {_g(limit)}")
+    return out, failures
+
+
+def run_row(row: Row, quick: bool, folder: Path) -> RowResult:
+    """Build and run ``row`` into ``folder``, then evaluate its checks (after a stop too);
+    never raises."""
+    from sphfem.scene import parse_scene
+    from sphfem.simulation import Simulation, SimulationStopped
+
+    t0 = time.perf_counter()
+    verdict, reason, summary, limit = STABLE, "", {}, None
+    try:
+        data = row.build(quick)
+        data["scene"]["name"] = row.name
+        if row.dt_factor is not None:
+            limit, name = _stable_limit(data)
+            data["time"]["dt"] = row.dt_factor * limit
+            data["time"]["cap_dt"] = row.cap_dt
+            reason = f"stable limit {limit:.3g} s ({name}); "
+        sim = Simulation(parse_scene(data, source=f"<stability:{row.name}>"))
+        rec = _Recorder(sim)
+        try:
+            summary = sim.run(folder, progress=False)
+        except SimulationStopped as e:
+            verdict, reason = STOPPED, reason + str(e)
+            summary = json.loads((Path(folder) / "summary.json").read_text())
+        outcome = Outcome(summary, Path(folder), verdict == STOPPED, summary.get("message", ""),
+                          rec.initial, rec.before if verdict == STOPPED else rec.state(),
+                          data, limit)
+        checks, failures = _evaluate(row, outcome)
+    except Exception as e:  # a crash is a failure of the row, reported, not raised
+        msg = (str(e).strip().splitlines() or [""])[0]
+        return RowResult(row.name, row.description, FAILED, f"{type(e).__name__}: {msg}", {},
+                         {}, time.perf_counter() - t0)
+    if verdict == STOPPED and row.expect == STABLE:
+        failures.insert(0, "stopped, but this scene must run to its end")
+    elif verdict == STABLE and row.expect == STOPPED:
+        failures.insert(0, "ran to its end, but a guard must stop this scene")
+    if failures:
+        verdict, reason = FAILED, "; ".join(failures) + "; " + reason
+    return RowResult(row.name, row.description, verdict, reason.strip("; "), figures(summary),
+                     checks, time.perf_counter() - t0)
 
 
 def figures(summary: dict) -> dict:
@@ -376,51 +669,6 @@ def figures(summary: dict) -> dict:
         "peak_von_mises_Pa": cp.get("peak_von_mises_Pa"),
         "wall_s": summary.get("wall_s"),
     }
-
-
-def run_row(row: Row, quick: bool, folder: Path) -> RowResult:
-    """Build and run ``row`` into ``folder``; never raises."""
-    from sphfem.scene import parse_scene
-    from sphfem.simulation import Simulation, SimulationStopped
-
-    t0 = time.perf_counter()
-    verdict, reason, summary = STABLE, "", {}
-    try:
-        data = row.build(quick)
-        data["scene"]["name"] = row.name
-        if row.dt_factor is not None:
-            limit, name = _stable_limit(data)
-            data["time"]["dt"] = row.dt_factor * limit
-            data["time"]["cap_dt"] = row.cap_dt
-            reason = f"stable limit {limit:.3g} s ({name}); "
-        sim = Simulation(parse_scene(data, source=f"<stability:{row.name}>"))
-        try:
-            summary = sim.run(folder, progress=False)
-        except SimulationStopped as e:
-            verdict, reason = STOPPED, reason + str(e)
-            summary = json.loads((folder / "summary.json").read_text())
-    except Exception as e:  # a crash is a failure of the row, reported, not raised
-        msg = (str(e).strip().splitlines() or [""])[0]
-        return RowResult(row.name, row.description, FAILED, f"{type(e).__name__}: {msg}", {},
-                         {}, time.perf_counter() - t0)
-    figs = figures(summary)
-    checks = {}
-    if verdict == STABLE:
-        for name, fn in row.checks.items():
-            value, limit, op = fn(summary)
-            ok = value <= limit if op == "<=" else value >= limit
-            checks[name] = {"value": value, "limit": limit, "op": op, "passed": bool(ok)}
-    bad = _nonfinite_files(folder)
-    if bad:
-        verdict, reason = FAILED, f"non-finite values written to {', '.join(bad[:3])}; " + reason
-    elif verdict not in row.allowed:
-        verdict, reason = FAILED, "stopped, but this scene must run to its end: " + reason
-    elif any(not c["passed"] for c in checks.values()):
-        verdict = FAILED
-        reason += "; ".join(f"{k}: {c['value']:.3g} not {c['op']} {c['limit']:.3g}"
-                            for k, c in checks.items() if not c["passed"])
-    return RowResult(row.name, row.description, verdict, reason.strip("; "), figs, checks,
-                     time.perf_counter() - t0)
 
 
 def run_matrix(quick: bool, out: Path | None = None, rows=None, progress=None
@@ -478,7 +726,7 @@ def markdown(results: list[RowResult], quick: bool) -> str:
                      + (f" {r.reason}" if r.reason else ""))
         for k, c in r.checks.items():
             mark = "pass" if c["passed"] else "**FAIL**"
-            lines.append(f"  - {mark} {k}: {c['value']:.3g} {c['op']} {c['limit']:.3g}")
+            lines.append(f"  - {mark} {k}: {_g(c['value'])} {c['op']} {_g(c['limit'])}")
     return "\n".join(lines) + "\n"
 
 
