@@ -34,7 +34,13 @@ def _parser() -> argparse.ArgumentParser:
     r.add_argument("--overwrite", action="store_true", help="replace an existing output folder")
     r.add_argument("--resume", action="store_true",
                    help="continue from the last checkpoint in the output folder")
-    r.add_argument("--no-progress", action="store_true", help="hide the progress bar")
+    r.add_argument("--no-progress", action="store_true",
+                   help="hide the progress bar and the set-up stage lines (stderr)")
+    r.add_argument("--keep-checkpoint", action="store_true",
+                   help="keep checkpoint.npz after a completed run (deleted by default)")
+    r.add_argument("--json", action="store_true",
+                   help="print the run's key figures as one JSON line instead of the "
+                        "human summary")
 
     v = sub.add_parser("validate", help="run a named validation case",
                        description="Run a validation case at several resolutions and variants.")
@@ -172,10 +178,12 @@ def _cmd_bench(args) -> int:
 
 
 def _cmd_run(args) -> int:
+    from sphfem import progress
     from sphfem.output import OutputExistsError, prepare_output_dir
     from sphfem.scene import SceneError, load_scene
-    from sphfem.simulation import Simulation, SimulationStopped
+    from sphfem.simulation import Simulation, SimulationStopped, format_summary
 
+    progress.enable(not args.no_progress)
     try:
         scene = load_scene(args.scene)
     except SceneError as e:
@@ -205,11 +213,16 @@ def _cmd_run(args) -> int:
         raise UsageError(f"{args.out}: cannot create the output folder: "
                          f"{e.strerror or e}") from None
     try:
-        summary = sim.run(out, progress=not args.no_progress, resume=args.resume)
+        summary = sim.run(out, progress=not args.no_progress, resume=args.resume,
+                          keep_checkpoint=args.keep_checkpoint)
     except SimulationStopped as e:
         print(f"sphfem: run stopped: {e}", file=sys.stderr)
         return EXIT_FAIL
-    print(json.dumps({k: summary[k] for k in ("steps", "t", "wall_s") if k in summary}))
+    if args.json:
+        keys = ("status", "steps", "t", "setup_s", "wall_s", "total_s", "peak_rss_mb")
+        print(json.dumps({k: summary[k] for k in keys if k in summary}))
+    else:
+        print(format_summary(summary, out))
     return EXIT_OK
 
 

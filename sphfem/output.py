@@ -19,12 +19,35 @@ class OutputExistsError(Exception):
     """The output folder exists and ``--overwrite`` was not given."""
 
 
+def file_mode() -> int:
+    """Permissions of a new file as ``open()`` makes it: 0o666 minus the process umask.
+
+    ``tempfile.mkstemp`` creates its files 0o600 whatever the umask, so a result written
+    through it would be readable by its owner only; :func:`atomic_write_bytes` gives the
+    file this mode instead.  The umask is read from ``/proc/self/status`` (Linux >= 4.7)
+    or, elsewhere, by setting it and putting it back.
+    """
+    try:
+        with open("/proc/self/status") as fh:
+            for line in fh:
+                if line.startswith("Umask:"):
+                    return 0o666 & ~int(line.split()[1], 8)
+    except (OSError, ValueError):
+        pass
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return 0o666 & ~mask
+
+
 def atomic_write_bytes(path, data: bytes) -> None:
-    """Write ``data`` to ``path`` via a temporary file and an atomic rename."""
+    """Write ``data`` to ``path`` via a temporary file and an atomic rename (mode
+    :func:`file_mode`, as a plain ``open()`` would make it)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
     try:
+        if hasattr(os, "fchmod"):
+            os.fchmod(fd, file_mode())
         with os.fdopen(fd, "wb") as fh:
             fh.write(data)
         os.replace(tmp, path)

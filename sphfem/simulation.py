@@ -22,10 +22,23 @@ from sphfem import __version__, kernels
 from sphfem.neighbors import build_neighbor_list, cell_sort_permutation, min_image
 from sphfem.output import ParticleSeries, atomic_write_bytes, write_json
 from sphfem.physics import build_modules
+from sphfem.progress import StageLog, peak_rss_mb, process_s, say, stage
 
 logger = logging.getLogger(__name__)
 
 CHECKPOINT = "checkpoint.npz"
+
+#: what the timing and memory figures of ``summary.json`` cover
+TIMING_SCOPE = (
+    "setup_s: building the Simulation (particles, first neighbour list, every module's "
+    "set-up: ghosts, meshing, assembly, factorisation, numba kernels they compile) and, "
+    "after --resume, loading the checkpoint; wall_s: the stepping loop (with the outputs "
+    "written during it and kernels compiled in the first steps); total_s: setup_s + run() "
+    "to the final summary; process_s: the whole process so far (with the Python imports "
+    "and reading the scene; Linux only); wall_s_per_module: inside the loop; peak_rss_mb: "
+    "the largest resident memory of the process (getrusage). After --resume all of these "
+    "cover this process only; 'resumed.accumulated' adds the earlier processes up to their "
+    "last checkpoint (the time a killed process spent after it is not known).")
 
 
 @njit(cache=True)
@@ -55,6 +68,13 @@ class Simulation:
     """
 
     def __init__(self, scene, source: str | None = None, particles=None):
+        self._t_created = time.perf_counter()
+        self.stage_log = StageLog()
+        with self.stage_log:
+            self._setup(scene, source, particles)
+        self.setup_s = time.perf_counter() - self._t_created
+
+    def _setup(self, scene, source, particles) -> None:
         from sphfem.geometry import build_particles
 
         self.scene = scene
@@ -66,7 +86,10 @@ class Simulation:
         self.lo = np.asarray(scene.domain.lo, dtype=np.float64)
         self.hi = np.asarray(scene.domain.hi, dtype=np.float64)
         self.period = np.where(scene.domain.periodic, self.hi - self.lo, 0.0)
-        self.particles = particles if particles is not None else build_particles(scene)
+        if particles is None:
+            with stage("building particles"):
+                particles = build_particles(scene)
+        self.particles = particles
         self.modules = build_modules(scene)
         for mod in self.modules:
             for name, (dtype, ncomp) in mod.fields().items():
@@ -76,6 +99,7 @@ class Simulation:
         self.steps_above_limit = 0
         self.nbrs = None
         self.nbrs_version = 0
+        self._earlier = None  # a resumed run: step, time and seconds before this process
         self.moving = any(m.moves_particles for m in self.modules)
         skin = scene.sph.skin
         self.skin = (0.15 if self.moving else 0.0) if skin is None else skin
@@ -83,10 +107,12 @@ class Simulation:
         self.rebuilds = 0
         self._x_at_build = None
         self.wall = {"neighbors": 0.0, **{m.name: 0.0 for m in self.modules}}
-        self._sort_by_cell()
-        self.update_neighbors()
+        with stage(f"first neighbour list ({self.particles.n} particles)"):
+            self._sort_by_cell()
+            self.update_neighbors()
         for mod in self.modules:
-            mod.init(self)
+            with stage(f"setting up {mod.name}"):
+                mod.init(self)
         logger.info("scene %s: %d particles, dim %d, kernel %s, R = %g m, modules %s",
                     getattr(scene, "name", "?"), self.particles.n, self.dim, scene.sph.kernel,
                     self.R, [m.name for m in self.modules])
@@ -185,19 +211,36 @@ class Simulation:
                 "stiff material (try a smaller [time] cfl or the implicit option)"
             )
 
-    def run(self, out, progress: bool = True, resume: bool = False) -> dict:
-        """Run to ``scene.time.t_end``; write outputs into folder ``out``; return the summary."""
+    def run(self, out, progress: bool = True, resume: bool = False,
+            keep_checkpoint: bool = False) -> dict:
+        """Run to ``scene.time.t_end``; write outputs into folder ``out``; return the summary.
+
+        ``resume``: continue from ``out/checkpoint.npz`` when it exists.  The checkpoint
+        (written at every output time) is deleted when the run completes, unless
+        ``keep_checkpoint``; a stopped run or one that hit ``max_steps`` keeps it.
+        """
+        run0 = time.perf_counter()
+        with self.stage_log:
+            summary = self._run(Path(out), progress, resume, keep_checkpoint, run0)
+        if summary["status"] == "stopped":
+            raise SimulationStopped(summary["message"])
+        return summary
+
+    def _run(self, out: Path, progress, resume, keep_checkpoint, run0) -> dict:
         from tqdm import tqdm
 
-        out = Path(out)
         self.out = out  # modules that write their own files (the coupling) look here
         t_end = self.scene.time.t_end
         max_steps = self.scene.time.max_steps
         every = self.scene.output.every
         series = ParticleSeries(out)
         fields = self.scene.output.fields or None
+        self._earlier = None
         if resume and (out / CHECKPOINT).exists():
-            self.load_checkpoint(out / CHECKPOINT)
+            t0 = time.perf_counter()
+            with stage(f"loading {CHECKPOINT}"):
+                self.load_checkpoint(out / CHECKPOINT)
+            self.setup_s += time.perf_counter() - t0
             series.entries = self._series_entries
         else:
             series.write(self.t, self.particles, fields)
@@ -205,7 +248,10 @@ class Simulation:
         dts, limiter_counts = [], {}
         limit_min = np.inf  # smallest step the limits allowed (before output/end truncation)
         status, message = "completed", ""
-        wall0 = time.perf_counter()
+        say(f"stepping from t = {self.t:.4g} s to {t_end:.4g} s ({self.particles.n} "
+            f"particles; set-up took {self.setup_s:.1f} s)")
+        self._wall0 = wall0 = time.perf_counter()
+        self._run0 = run0
         bar = tqdm(total=t_end, unit="s", disable=not progress or None, leave=False,
                    bar_format="{l_bar}{bar}| {n:.3g}/{total:.3g} s [{elapsed}<{remaining}]")
         bar.update(self.t)
@@ -241,9 +287,18 @@ class Simulation:
                         f"t = {series.entries[-1][0]:.6g} s)")
         summary = self.summary(status, message, wall, dts, limiter_counts)
         summary["dt"]["min_allowed"] = float(limit_min) if np.isfinite(limit_min) else None
+        if status == "completed" and not keep_checkpoint:
+            (out / CHECKPOINT).unlink(missing_ok=True)
+        summary["checkpoint"] = (str(out / CHECKPOINT) if (out / CHECKPOINT).exists()
+                                 else None)
+        summary["total_s"] = self.setup_s + (time.perf_counter() - run0)
+        summary["process_s"] = process_s()
+        if self._earlier is not None:
+            e = self._earlier
+            summary["resumed"]["accumulated"] = {
+                "setup_s": e["setup_s"] + self.setup_s, "wall_s": e["wall_s"] + wall,
+                "total_s": e["total_s"] + summary["total_s"]}
         write_json(out / "summary.json", summary)
-        if status == "stopped":
-            raise SimulationStopped(message)
         return summary
 
     # -- records --------------------------------------------------------------------------
@@ -251,6 +306,7 @@ class Simulation:
         import numba
 
         n = self.particles.n
+        dts_list = dts
         dts = np.asarray(dts) if dts else np.zeros(1)
         kinds = np.bincount(self.particles.kind.astype(np.int64), minlength=4)
         return {
@@ -268,9 +324,19 @@ class Simulation:
                           "solid": int(kinds[2]), "ghost": int(kinds[3])},
             "steps": self.step_count,
             "t": self.t,
+            "setup_s": self.setup_s,
             "wall_s": wall,
+            "total_s": None,  # set by run() once the last outputs are written
+            "process_s": None,  # likewise
+            "peak_rss_mb": peak_rss_mb(),
+            "timing_scope": TIMING_SCOPE,
+            "setup": self.stage_log.to_dict(),
+            "resumed": None if self._earlier is None else {
+                "from_t": self._earlier["t"], "from_step": self._earlier["step"],
+                "processes_before": self._earlier["processes"],
+                "steps_this_process": len(dts_list)},
             "wall_s_per_module": dict(self.wall),
-            "particle_steps_per_s": n * len(dts) / wall if wall > 0 else None,
+            "particle_steps_per_s": n * len(dts_list) / wall if wall > 0 else None,
             "dt": {"min": float(dts.min()), "max": float(dts.max()), "mean": float(dts.mean()),
                    "controlling_limit_counts": limiter_counts,
                    "steps_above_stable_limit": self.steps_above_limit},
@@ -285,7 +351,13 @@ class Simulation:
 
         buf = io.BytesIO()
         arrays = {f"f_{k}": v for k, v in self.particles.fields.items()}
+        now = time.perf_counter()
+        e = self._earlier or {"setup_s": 0.0, "wall_s": 0.0, "total_s": 0.0, "processes": 0}
         np.savez(buf, t=self.t, step=self.step_count,
+                 acc_setup_s=e["setup_s"] + self.setup_s,
+                 acc_wall_s=e["wall_s"] + (now - self._wall0),
+                 acc_total_s=e["total_s"] + self.setup_s + (now - self._run0),
+                 acc_processes=e["processes"] + 1,
                  series_t=np.array([e[0] for e in series.entries]),
                  series_f=np.array([e[1] for e in series.entries]), **arrays)
         atomic_write_bytes(path, buf.getvalue())
@@ -299,6 +371,44 @@ class Simulation:
                     self.particles.fields[k[2:]] = np.ascontiguousarray(z[k])
             self._series_entries = list(zip(z["series_t"].tolist(), z["series_f"].tolist(),
                                             strict=True))
+            acc = {k: float(z[f"acc_{k}"]) if f"acc_{k}" in z.files else 0.0
+                   for k in ("setup_s", "wall_s", "total_s")}
+            acc["processes"] = int(z["acc_processes"]) if "acc_processes" in z.files else 1
+        self._earlier = {"t": self.t, "step": self.step_count, **acc}
         self.update_neighbors()
         for mod in self.modules:
             mod.init(self)
+
+
+def format_summary(summary: dict, out) -> str:
+    """A few lines for a person: status, time and memory, the substrate's peak von Mises
+    stress (value, place, time) and the heat handed over when the scene couples, and
+    where the outputs are (``sphfem run`` prints this; ``--json`` prints figures instead).
+    """
+    out = Path(out)
+    s = summary
+    lines = [f"sphfem: run {s['status']}: {s['steps']} steps to t = {s['t']:.4g} s, "
+             f"{s['particles']['total']} particles"]
+    if s.get("message"):
+        lines.append(f"  {s['message']}")
+    rss = s.get("peak_rss_mb")
+    proc = s.get("process_s")
+    lines.append(f"  time: set-up {s['setup_s']:.1f} s, stepping {s['wall_s']:.1f} s, total "
+                 f"{s['total_s']:.1f} s" + (f" ({proc:.1f} s with imports)" if proc else "")
+                 + f"; peak memory {rss:.0f} MB"
+                 + (" (this process; resumed)" if s.get("resumed") else ""))
+    c = s.get("diagnostics", {}).get("coupling")
+    if c and c.get("peak_von_mises_Pa") is not None:
+        where = ", ".join(f"{v * 1e6:.4g}" for v in c["peak_von_mises_location_m"])
+        lines.append(f"  substrate: peak von Mises {c['peak_von_mises_Pa'] / 1e6:.4g} MPa at "
+                     f"({where}) um, t = {c['peak_von_mises_t_s']:.4g} s")
+    if c and c.get("heat"):
+        h = c["heat"]
+        lines.append(f"  heat handed to the substrate: {h['heat_to_solid_J']:.4g} J (the "
+                     f"fluid lost {h['heat_lost_by_fluid_J']:.4g} J)")
+    names = sorted(p.name + ("/" if p.is_dir() else "") for p in out.iterdir()
+                   if not p.name.startswith(".") and (p.is_dir() or p.suffix in (".pvd",
+                                                                                ".json",
+                                                                                ".npz")))
+    lines.append(f"  outputs: {out}/ ({', '.join(names)})")
+    return "\n".join(lines)

@@ -1,5 +1,6 @@
 """A run killed mid-way and resumed with --resume ends equal (1e-12) to an uninterrupted one."""
 
+import json
 import os
 import signal
 import subprocess
@@ -89,3 +90,16 @@ def test_kill_and_resume_matches_uninterrupted(tmp_path):
     T_cut, n_cut = _final_T(cut)
     assert n_cut == n_ref
     np.testing.assert_allclose(T_cut, T_ref, rtol=1e-12, atol=0)
+    # the summary says what the figures of the resumed process cover
+    s_ref = json.loads((ref / "summary.json").read_text())
+    s_cut = json.loads((cut / "summary.json").read_text())
+    assert s_ref["resumed"] is None and s_cut["steps"] == s_ref["steps"]
+    r = s_cut["resumed"]
+    assert r["processes_before"] == 1 and 0 < r["from_step"] < s_cut["steps"]
+    assert r["steps_this_process"] == s_cut["steps"] - r["from_step"]
+    assert r["from_t"] == pytest.approx(1e-3 * round(r["from_t"] / 1e-3), rel=1e-9)
+    acc = r["accumulated"]
+    for k in ("setup_s", "wall_s", "total_s"):
+        assert acc[k] > s_cut[k]  # this process plus the killed one up to its checkpoint
+    # a completed run removes its checkpoint (nothing left to resume)
+    assert not (ref / "checkpoint.npz").exists() and not (cut / "checkpoint.npz").exists()

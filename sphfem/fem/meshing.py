@@ -138,8 +138,12 @@ def _write_cached(recipe: str, params: dict, build, path=None) -> Path:
     if cached.exists():
         logger.info("mesh cache hit %s", cached)
     else:
+        from sphfem.output import file_mode
+        from sphfem.progress import stage
+
         t0 = time.perf_counter()
-        with _Gmsh(params.get("nthreads")) as gmsh:
+        with stage(f"meshing substrate (gmsh {recipe}, cached afterwards)"), \
+                _Gmsh(params.get("nthreads")) as gmsh:
             build(gmsh)
             fd, tmp = tempfile.mkstemp(prefix=f".{cached.stem}.", suffix=".msh", dir=folder)
             os.close(fd)
@@ -147,6 +151,7 @@ def _write_cached(recipe: str, params: dict, build, path=None) -> Path:
                 gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
                 gmsh.option.setNumber("Mesh.Binary", 0)
                 gmsh.write(tmp)
+                os.chmod(tmp, file_mode())  # mkstemp made it 0600
                 os.replace(tmp, cached)
             finally:
                 if os.path.exists(tmp):
@@ -163,6 +168,9 @@ def _write_cached(recipe: str, params: dict, build, path=None) -> Path:
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
     os.close(fd)
     shutil.copyfile(cached, tmp)
+    from sphfem.output import file_mode
+
+    os.chmod(tmp, file_mode())
     os.replace(tmp, path)
     return path
 

@@ -50,6 +50,7 @@ from skfem import (
 )
 
 from sphfem.fem import forms
+from sphfem.progress import stage
 
 logger = logging.getLogger(__name__)
 
@@ -339,10 +340,13 @@ class FEMSubstrate:
             # grad u : grad v is a polynomial of degree 2(p-1) on an affine simplex: the
             # minimal exact rule is 1 point for P1 (4x cheaper than the default rule)
             kbasis = Basis(mesh, self.basis.elem, intorder=2 * (int(element[1]) - 1))
-        self.K = K.assemble(kbasis).tocsr()
+        with stage(f"assembling K ({self.basis.N} dofs)"):
+            self.K = K.assemble(kbasis).tocsr()
         self.timings["assemble_K"] = time.perf_counter() - t1
         t2 = time.perf_counter()
-        self._factorize()
+        what = "factorising" if solver == "direct" else "building the AMG preconditioner of"
+        with stage(f"{what} K ({len(self.I)} unknowns)"):
+            self._factorize()
         self.timings["factorize"] = time.perf_counter() - t2
         self._u_prev = None
         self._mass = None
