@@ -469,7 +469,7 @@ def cache(tmp_path, monkeypatch):
 
 def test_control_scene_with_mesh_file_runs(tmp_path, capsys, meshes, cache):
     """The scene the faults below break runs as is (so the faults are what stops them)."""
-    rc, out, err, out_dir = run_cli(capsys, tmp_path, with_mesh_file(meshes["rect"]))
+    rc, out, err, out_dir = run_cli(capsys, tmp_path, with_mesh_file(meshes["rect"]), "--json")
     assert rc == 0, err
     assert json.loads(out)["steps"] >= 1
     assert (out_dir / "summary.json").exists() and (out_dir / "substrate").is_dir()
