@@ -5,7 +5,7 @@ used); docs/api.md shows each in a runnable example::
 
     scene = sphfem.load_scene("drop.toml")          # a path, a dict or a Scene
     res = sphfem.run(scene, out="runs/drop", overwrite=True)
-    res.summary["steps"], res.particles.T, res.peak_von_mises, res.probes()
+    res.summary["steps"], res.particles.T, res.peak_von_mises, res.probes(), res.history()
 
     r = sphfem.validate("laplacian", quick=True, json="lap.json", plot="lap.png")
     r.passed, r.runs, sphfem.validation.format_table(r)
@@ -125,7 +125,8 @@ class Result:
 
     Files in ``out``: ``summary.json``; ``particles.pvd`` + ``particles_NNNNN.vtu`` (one
     per output time, :meth:`frames`); with a coupled substrate ``<coupling.output>/``
-    (default ``substrate/``) holds ``probes.csv``, ``history.json`` and ``substrate.pvd``.
+    (default ``substrate/``) holds ``probes.csv`` (:meth:`probes`), ``history.json``
+    (:meth:`history`) and ``substrate.pvd`` (``frames("substrate")``).
     """
 
     out: Path
@@ -240,6 +241,19 @@ class Result:
         pts = self.coupling.get("probes_m")
         out["points"] = None if pts is None else np.asarray(pts, float)
         return out
+
+    def history(self) -> list[dict] | None:
+        """One record per substrate solve from ``history.json``: ``t``, ``step``,
+        ``force_sensors`` / ``force_load`` (total force the fluid exerts on the substrate
+        before / after the transfer [N, in 2D N/m]), ``peak_von_mises``,
+        ``peak_location``, ``mean_stress`` and ``probes``.  None without a coupled
+        substrate."""
+        import json
+
+        if self.coupling is None:
+            return None
+        path = self.out / self._coupling_folder() / "history.json"
+        return json.loads(path.read_text())["history"]
 
     def __repr__(self) -> str:
         s = self.summary
