@@ -59,6 +59,9 @@ def _parser() -> argparse.ArgumentParser:
     v.add_argument("--update-readme", metavar="README",
                    help="with 'all' or 'stability': write the table into README's marked "
                         "block")
+    v.add_argument("--no-warmup", action="store_true",
+                   help="time the runs without the untimed warm-up (numba compilation and "
+                        "first-use costs then fall into the first timed run)")
 
     b = sub.add_parser("bench", help="throughput benchmarks",
                        description="Throughput: neighbour search, summation density, fluid steps.")
@@ -73,7 +76,13 @@ def _parser() -> argparse.ArgumentParser:
 
 
 def _cmd_validate(args) -> int:
-    from sphfem.validation import format_table, load_cases, work_precision_plot, write_json
+    from sphfem.validation import (
+        format_table,
+        load_cases,
+        run_case,
+        work_precision_plot,
+        write_json,
+    )
 
     cases = load_cases()
     if args.list:
@@ -96,7 +105,7 @@ def _cmd_validate(args) -> int:
         return _validate_stability(args)
     if args.case not in cases:
         raise UsageError(f"validate: unknown case {args.case!r}; known: {', '.join(sorted(cases))}")
-    result = cases[args.case](args.quick)
+    result = run_case(args.case, args.quick, warmup=not args.no_warmup)
     print(format_table(result))
     if args.json:
         write_json(result, args.json)
@@ -117,11 +126,15 @@ def _validate_all(args) -> int:
         out = prepare_output_dir(args.out, overwrite=args.overwrite)
     except OutputExistsError as e:
         raise UsageError(str(e)) from None
-    ok, summary = run_all(Path(out), args.quick)
+    print("| case | verdict | wall s |\n|---|---|---|", flush=True)
+    ok, summary = run_all(Path(out), args.quick, warmup=not args.no_warmup,
+                          progress=lambda line: print(line, flush=True))
     if args.update_readme:
         update_readme(Path(args.update_readme), summary, args.quick)
-    print("\n".join(summary))
     print(f"report: {Path(out) / 'report.md'}")
+    cells = [[c.strip() for c in line.strip("|").split("|")] for line in summary[2:]]
+    print("PASSED" if ok else "FAILED: " + ", ".join(f"{c[0]} ({c[1]})" for c in cells
+                                                    if c[1] != "passed"))
     return EXIT_OK if ok else EXIT_FAIL
 
 

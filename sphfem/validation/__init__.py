@@ -4,6 +4,13 @@ A case is a function ``case(quick: bool) -> CaseResult`` registered with :func:`
 Each run reports its variant, resolution, particle count, relative L2 and L-infinity errors
 and wall seconds; the result carries the observed convergence order per variant, the
 criteria with their measured values, and the overall verdict.
+
+Wall seconds exclude numba's compilation where the harness can arrange it: :func:`run_case`
+first runs an untimed warm-up (the case's registered ``warmup`` hook, or by default the
+case itself at quick settings, stopped at the end of its first timed block: the cheapest
+configuration of its first variant), then the timed case.  Every :class:`Timer` block also
+measures the seconds numba spent compiling or loading kernels from its cache inside it;
+runs that still paid for it are named in the result's notes.
 """
 
 from __future__ import annotations
@@ -18,6 +25,8 @@ from dataclasses import asdict, dataclass, field
 import numpy as np
 
 CASES: dict[str, Callable[[bool], CaseResult]] = {}
+#: per-case warm-up hooks (None: the default, :func:`_warm_up_first_block`)
+WARMUPS: dict[str, Callable[[], None] | None] = {}
 _CASE_MODULES = ("sphfem.validation.operators", "sphfem.validation.heat",
                  "sphfem.validation.fluid", "sphfem.validation.fem",
                  "sphfem.validation.solid", "sphfem.validation.coupling")
@@ -84,11 +93,14 @@ class CaseResult:
         }
 
 
-def register(name: str):
-    """Decorator registering a validation case under ``name``."""
+def register(name: str, warmup: Callable[[], None] | None = None):
+    """Decorator registering a validation case under ``name``; ``warmup``: an untimed
+    callable that compiles what the case's timed runs use (default: the case's own first
+    timed block at quick settings, see :func:`run_case`)."""
 
     def deco(fn):
         CASES[name] = fn
+        WARMUPS[name] = warmup
         return fn
 
     return deco
@@ -126,15 +138,126 @@ def observed_order(runs: list[Run], variant: str) -> float | None:
     return math.log(c.error_l2 / f.error_l2) / math.log(c.resolution / f.resolution)
 
 
+class WarmedUp(BaseException):
+    """Raised at the end of the first :class:`Timer` block of a warm-up run (a
+    BaseException, so that a case's own ``except Exception`` does not swallow it)."""
+
+
+class _Session:
+    """The timed blocks of one case run (``warmup``: stop after the first)."""
+
+    def __init__(self, warmup: bool = False):
+        self.warmup = warmup
+        self.blocks: list[Timer] = []
+
+
+_SESSION: list[_Session] = []
+
+
+def _compile_listener():
+    """A numba event listener summing the seconds of outermost ``numba:compiler_lock``
+    events: compilations and loads from the on-disk cache (they nest)."""
+    from numba.core import event
+
+    class _Clock(event.Listener):
+        def __init__(self):
+            self.s, self._depth, self._t0 = 0.0, 0, 0.0
+
+        def on_start(self, ev):
+            if self._depth == 0:
+                self._t0 = time.perf_counter()
+            self._depth += 1
+
+        def on_end(self, ev):
+            self._depth -= 1
+            if self._depth == 0:
+                self.s += time.perf_counter() - self._t0
+
+    return _Clock()
+
+
 class Timer:
-    """Context manager measuring wall seconds into ``.s``."""
+    """Context manager measuring wall seconds into ``.s`` and, of them, the seconds numba
+    spent compiling or loading kernels from its cache into ``.compile_s``.  Inside
+    :func:`run_case` each block is recorded; in its warm-up the first block ends the case
+    (:class:`WarmedUp`)."""
 
     def __enter__(self):
+        from numba.core import event
+
+        self._clock = _compile_listener()
+        event.register("numba:compiler_lock", self._clock)
         self._t = time.perf_counter()
         return self
 
-    def __exit__(self, *exc):
+    def __exit__(self, exc_type, *exc):
+        from numba.core import event
+
         self.s = time.perf_counter() - self._t
+        event.unregister("numba:compiler_lock", self._clock)
+        self.compile_s = self._clock.s
+        if _SESSION:
+            _SESSION[-1].blocks.append(self)
+            if _SESSION[-1].warmup and exc_type is None:
+                raise WarmedUp
+
+
+def _warm_up_first_block(fn: Callable[[bool], CaseResult]) -> None:
+    """The default warm-up: ``fn(True)`` up to the end of its first timed block (cases time
+    their coarsest resolution first)."""
+    _SESSION.append(_Session(warmup=True))
+    try:
+        fn(True)
+    except WarmedUp:
+        pass
+    finally:
+        _SESSION.pop()
+
+
+#: a timed block that spent more than this in numba's compiler is named in the notes
+COMPILE_NOTE_S = 0.05
+
+
+def run_case(name: str, quick: bool, warmup: bool = True,
+             fn: Callable[[bool], CaseResult] | None = None) -> CaseResult:
+    """Run the registered case ``name`` (or the case function ``fn``) with its timed runs
+    warmed up.
+
+    ``warmup``: first run the case's ``warmup`` hook, or by default the case at quick
+    settings up to the end of its first timed block, untimed; this moves numba's
+    compilation (and first-use costs such as imports) out of the timed runs.  Runs whose
+    timed block still spent more than :data:`COMPILE_NOTE_S` compiling (a variant whose
+    kernels the warm-up did not reach) are named in the notes, with the warm-up seconds.
+    """
+    fn = fn if fn is not None else load_cases()[name]
+    notes = []
+    if warmup:
+        t0 = time.perf_counter()
+        hook = WARMUPS.get(name)
+        if hook is not None:
+            hook()
+        else:
+            _warm_up_first_block(fn)
+        notes.append(f"untimed warm-up before the timed runs: {time.perf_counter() - t0:.1f} s")
+    session = _Session()
+    _SESSION.append(session)
+    try:
+        result = fn(quick)
+    finally:
+        _SESSION.pop()
+    by_wall = {b.s: b for b in session.blocks}
+    slow = [(r, by_wall[r.wall_s]) for r in result.runs
+            if r.wall_s in by_wall and by_wall[r.wall_s].compile_s > COMPILE_NOTE_S]
+    other = sum(b.compile_s for b in session.blocks
+                if b.compile_s > COMPILE_NOTE_S and b not in [t for _, t in slow])
+    if slow or other:
+        what = ", ".join(f"{r.variant} at {r.resolution:.4g}: {t.compile_s:.2f} of "
+                         f"{r.wall_s:.2f} s" for r, t in slow)
+        if other:
+            what += (", " if what else "") + f"other timed blocks: {other:.2f} s"
+        notes.append(f"numba compilation inside timed runs: {what}")
+    result.notes.extend(notes)
+    return result
 
 
 def format_table(result: CaseResult) -> str:
