@@ -204,3 +204,31 @@ def test_fresh_cache_compiles_once(tmp_path):
     second = _run_json(f, tmp_path / "o2", env)
     assert first["numba_compilations"] > 0
     assert second["numba_compilations"] == 0, second
+
+
+def _lattice_pairs(k: int, r2_max: int, strict: bool) -> int:
+    """Directed pairs of a k^3 unit lattice within sqrt(r2_max) (exact: each offset
+    (a, b, c) occurs (k - |a|)(k - |b|)(k - |c|) times)."""
+    total = 0
+    for a in range(-3, 4):
+        for b in range(-3, 4):
+            for c in range(-3, 4):
+                r2 = a * a + b * b + c * c
+                if r2 and (r2 < r2_max if strict else r2 <= r2_max):
+                    total += (k - abs(a)) * (k - abs(b)) * (k - abs(c))
+    return total
+
+
+def test_neighbour_bench_counts_pairs_inside_the_support():
+    """The micro-benchmark's pairs are the interacting ones, r < R (as the fluid bench and
+    PySPH count); the list's r = R pairs (zero weight; 30 of 122 per interior particle)
+    are reported apart."""
+    from sphfem.bench import run_bench
+
+    res = run_bench("neighbors", quick=True, threads=(1,), repeats=1, verbose=False)
+    c = res["cases"][0]
+    k = round(c["n"] ** (1 / 3))
+    assert k**3 == c["n"]
+    assert c["pairs"] == _lattice_pairs(k, 9, strict=True)
+    assert c["list_pairs"] == _lattice_pairs(k, 9, strict=False)
+    assert c["pairs_per_s"] == pytest.approx(c["pairs"] / c["density_s"])
