@@ -45,3 +45,98 @@ def test_update_readme_replaces_marked_block(tmp_path, monkeypatch):
     text = readme.read_text()
     assert "old table" not in text and "| good | passed |" in text
     assert text.startswith("intro\n") and text.endswith("rest\n")
+
+
+# --------------------------------------------------------------------------------------
+# warm-up before timing
+
+
+def _fake_case(log, compile_in=None):
+    """A case with three timed runs (coarse to fine) that logs what it executes; the run
+    named ``compile_in`` compiles a fresh numba function inside its timed block."""
+    from sphfem.validation import Timer
+
+    kernel = _fresh_kernel()
+
+    def case(quick):
+        log.append(("start", quick))
+        runs = []
+        for variant, h in (("a", 0.1), ("a", 0.05), ("b", 0.1)):
+            try:  # a case's own error handling must not swallow the warm-up's stop
+                with Timer() as tm:
+                    log.append((variant, h))
+                    if (variant, h) == compile_in:
+                        kernel(1.0)
+            except Exception:
+                log.append("swallowed")
+            runs.append(Run(variant, h, 10, h, h, tm.s))
+        return CaseResult("fake", runs, {"ok": Criterion("always", 0.0, 1.0)})
+
+    return case
+
+
+def _fresh_kernel():
+    """A numba function not compiled before (a new closure each call; no disk cache)."""
+    from numba import njit
+
+    k = float(len(_KERNELS))
+
+    @njit
+    def f(x):
+        return x * x + k
+
+    _KERNELS.append(f)
+    return f
+
+
+_KERNELS: list = []
+
+
+def test_warm_up_runs_the_first_timed_block_untimed():
+    from sphfem.validation import run_case
+
+    log = []
+    result = run_case("fake", False, fn=_fake_case(log))
+    assert log == [("start", True), ("a", 0.1),  # warm-up: quick, up to its first block
+                   ("start", False), ("a", 0.1), ("a", 0.05), ("b", 0.1)]
+    assert any("untimed warm-up" in n for n in result.notes)
+    log.clear()
+    run_case("fake", False, warmup=False, fn=_fake_case(log))
+    assert log == [("start", False), ("a", 0.1), ("a", 0.05), ("b", 0.1)]
+
+
+def test_registered_warm_up_hook_replaces_the_default(monkeypatch):
+    import sphfem.validation as V
+
+    calls, log = [], []
+    monkeypatch.setitem(V.WARMUPS, "fake", lambda: calls.append("hook"))
+    V.run_case("fake", True, fn=_fake_case(log))
+    assert calls == ["hook"] and log[0] == ("start", True) and len(log) == 4
+
+
+def test_timer_measures_numba_compilation():
+    """A block that compiles a numba function reports its compile seconds; calling the
+    compiled function again in a second block reports none."""
+    from sphfem.validation import Timer
+
+    f = _fresh_kernel()
+    with Timer() as first:
+        f(2.0)
+    with Timer() as second:
+        f(3.0)
+    assert first.compile_s > 0.01 and first.compile_s <= first.s
+    assert second.compile_s < 1e-3
+
+
+def test_compilation_left_in_a_timed_run_is_named():
+    """The warm-up reaches variant a's first block only: a kernel first compiled in
+    variant b's timed block is named in the notes; one compiled in a's first block is
+    moved out of the timed runs by the warm-up."""
+    from sphfem.validation import run_case
+
+    warm = run_case("fake", True, fn=_fake_case([], compile_in=("a", 0.1)))
+    assert not any("compilation inside timed runs" in n for n in warm.notes)
+    cold = run_case("fake", True, warmup=False, fn=_fake_case([], compile_in=("a", 0.1)))
+    assert any("compilation inside timed runs: a at 0.1" in n for n in cold.notes)
+    late = run_case("fake", True, fn=_fake_case([], compile_in=("b", 0.1)))
+    assert any("compilation inside timed runs: b at 0.1" in n for n in late.notes)
