@@ -230,3 +230,18 @@ def test_roller_is_a_symmetry_plane():
     scale = np.abs(full.u).max()
     assert scale > 0 and np.abs(half.u - full.u[k]).max() < 1e-5 * scale
     assert np.abs(half.stress - full.stress[k]).max() < 1e-5 * np.abs(full.stress).max()
+
+
+# ------------------------------------------------------------------ tlsph-stability criteria
+def test_stretch_criteria_can_fail():
+    """The stretch checks of `validate tlsph-stability` against the exact uniaxial SVK state
+    pass as specified (measured: lateral 0.5 %, force 0.02 % at dx = 0.1) and fail for a
+    wrong material (body nu = 0.2 against the nu = 0.1 reference: 43 %, 3.7 %) and for a
+    dynamic test (pull in 2 L/c, no hold: force 20 %)."""
+    from sphfem.validation.solid import FORCE_TOL, LATERAL_TOL, stretch_bar
+
+    ok = stretch_bar(0.1)
+    assert ok["finite"] and ok["lateral_err"] <= LATERAL_TOL and ok["force_err"] <= FORCE_TOL
+    bad = stretch_bar(0.1, nu=0.2, nu_exact=0.1)
+    assert bad["lateral_err"] > LATERAL_TOL and bad["force_err"] > FORCE_TOL
+    assert stretch_bar(0.1, pull_over_c=2.0, hold_over_c=0.0)["force_err"] > FORCE_TOL
