@@ -242,7 +242,7 @@ class TLSPHSubstrate:
         raise ValueError(f"dT: expected a scalar, a callable or {self.n_particles} values "
                          f"(one per particle), got shape {a.shape}")
 
-    def _set_loads(self, dT, tractions, point_forces, snap) -> None:
+    def _set_loads(self, dT, tractions, point_forces, snap, body_force=None) -> None:
         b = self.body
         b.f_ext[:] = 0.0
         Xall = b.ref.X
@@ -262,6 +262,10 @@ class TLSPHSubstrate:
             tv = (np.asarray(t(Xall[idx].T), float).T if callable(t)
                   else np.broadcast_to(np.asarray(t, float), (idx.size, self.dim)))
             b.f_ext[idx] += tv * area
+        if body_force is not None:
+            bv = (np.asarray(body_force(self.X.T), float).T if callable(body_force)
+                  else np.broadcast_to(np.asarray(body_force, float), self.X.shape))
+            b.f_ext[self.inside] += bv * self.vol[:, None]
         if point_forces is not None:
             pts, F = (np.atleast_2d(np.asarray(a, float)) for a in point_forces)
             cand = self.face_layer[snap] if snap else self.inside
@@ -270,9 +274,10 @@ class TLSPHSubstrate:
 
     # -- solve ---------------------------------------------------------------------------
     def solve(self, dT_nodal=None, tractions=None, point_forces=None, T_nodal=None,
-              snap: str | None = "top") -> TLSPHResult:
+              snap: str | None = "top", body_force=None) -> TLSPHResult:
         """Quasi-static response to this step's loads (relaxation warm-started from the
-        previous state)."""
+        previous state).  ``body_force``: constant (dim,) or callable of the reference
+        coordinates (dim, n) [N/m^dim], applied as b V on every body particle."""
         t0 = time.perf_counter()
         if T_nodal is not None:
             if dT_nodal is not None:
@@ -280,7 +285,7 @@ class TLSPHSubstrate:
             T = T_nodal
             dT_nodal = (lambda x: np.asarray(T(x)) - self.T0) if callable(T) else \
                 np.asarray(T, float) - self.T0
-        self._set_loads(dT_nodal, tractions, point_forces, snap)
+        self._set_loads(dT_nodal, tractions, point_forces, snap, body_force)
         info = relax(self.body, tol=self.tol, max_steps=self.max_steps)
         self.body.internal_forces()
         sig = self.body.cauchy()[self.inside]

@@ -394,6 +394,122 @@ def _svf_traction(x):
     return np.stack([0.0 * x[0], -p["p"] * on.astype(float)])
 
 
+MMS_TOL = 0.05  #: sph-vs-fem: TL-SPH error against the manufactured solution (finest)
+#: manufactured displacement amplitudes [m] (strains ~ 5e-4, stresses ~ 100 MPa, as the
+#: thermal ones)
+MMS = dict(U=0.5e-6, V=0.3e-6)
+
+
+def mms_fields(x):
+    """Manufactured plane-strain thermo-elastic solution on the sph-vs-fem block
+    (x in [-Lx/2, Lx/2], y in [-Ly, 0]; ``x`` (2, n)), with s = (y + Ly)/Ly, k = pi/Lx:
+
+        u_x = U s^2 sin(k x),   u_y = V s^2 cos(k x)
+
+    (zero with its y-derivative on the clamped bottom, so the clamp is exact for FEM and
+    for TL-SPH's held rows), the temperature field of :func:`_svf_dT`, and the linear
+    thermo-elastic stress sigma = lam tr(eps) I + 2 mu eps - (3 lam + 2 mu) alpha dT I
+    (sigma_zz = lam tr(eps) - (3 lam + 2 mu) alpha dT).  The body force b = -div sigma is
+    derived by hand (:func:`mms_body_force`; tests/test_solid.py checks it by finite
+    differences), the tractions are sigma n on the free faces.  Returns ``(u (2, n),
+    sigma (n, 3, 3))``."""
+    c = _mms_components(np.asarray(x, float))
+    sig = np.zeros((c["ux"].size, 3, 3))
+    sig[:, 0, 0] = c["sxx"].ravel()
+    sig[:, 1, 1] = c["syy"].ravel()
+    sig[:, 2, 2] = c["szz"].ravel()
+    sig[:, 0, 1] = sig[:, 1, 0] = c["sxy"].ravel()
+    return np.stack([c["ux"].ravel(), c["uy"].ravel()]), sig
+
+
+def _mms_components(x) -> dict:
+    """u_x, u_y, sigma_xx, _yy, _zz, _xy of :func:`mms_fields` at ``x`` (2, ...), each
+    shaped like x[0] (scikit-fem passes (2, elements, points))."""
+    p = SVF
+    lam, mu = _svf_lame()
+    Lx, Ly = p["size"]
+    k = math.pi / Lx
+    S, C = np.sin(k * x[0]), np.cos(k * x[0])
+    s = (x[1] + Ly) / Ly
+    U, V = MMS["U"], MMS["V"]
+    exx = U * k * s**2 * C
+    eyy = 2 * V * s * C / Ly
+    exy = 0.5 * (2 * U * s * S / Ly - V * k * s**2 * S)
+    th = (3 * lam + 2 * mu) * p["alpha"] * _svf_dT(x)
+    tr = exx + eyy
+    return {"ux": U * s**2 * S, "uy": V * s**2 * C, "sxx": lam * tr + 2 * mu * exx - th,
+            "syy": lam * tr + 2 * mu * eyy - th, "szz": lam * tr - th, "sxy": 2 * mu * exy}
+
+
+def mms_body_force(x):
+    """b = -div sigma of :func:`mms_fields` (2, n) [N/m^3]."""
+    p = SVF
+    lam, mu = _svf_lame()
+    Lx, Ly = p["size"]
+    k = math.pi / Lx
+    S, C = np.sin(k * x[0]), np.cos(k * x[0])
+    s = (x[1] + Ly) / Ly
+    U, V = MMS["U"], MMS["V"]
+    dT = _svf_dT(x)
+    g = (3 * lam + 2 * mu) * p["alpha"]
+    dth_dx = g * dT * (-2 * x[0] / p["w"] ** 2)
+    dth_dy = g * dT / p["d"]
+    dtr_dx = -U * k**2 * s**2 * S - 2 * V * s * k * S / Ly
+    dtr_dy = 2 * U * k * s * C / Ly + 2 * V * C / Ly**2
+    dexx_dx = -U * k**2 * s**2 * S
+    deyy_dy = 2 * V * C / Ly**2
+    dexy_dy = U * S / Ly**2 - V * k * s * S / Ly
+    dexy_dx = U * s * k * C / Ly - 0.5 * V * k**2 * s**2 * C
+    bx = -(lam * dtr_dx + 2 * mu * dexx_dx - dth_dx + 2 * mu * dexy_dy)
+    by = -(2 * mu * dexy_dx + lam * dtr_dy + 2 * mu * deyy_dy - dth_dy)
+    return np.stack([bx, by])
+
+
+def _svf_lame():
+    from sphfem.solid.constitutive import lame
+
+    return lame(SVF["E"], SVF["nu"])
+
+
+def mms_tractions() -> dict:
+    """``{face: t(x)}``, t = sigma n of :func:`mms_fields` on the free faces."""
+    def face(n):
+        def t(x):
+            c = _mms_components(np.asarray(x, float))
+            return np.stack([c["sxx"] * n[0] + c["sxy"] * n[1],
+                             c["sxy"] * n[0] + c["syy"] * n[1]])
+        return t
+
+    return {"top": face((0.0, 1.0)), "left": face((-1.0, 0.0)), "right": face((1.0, 0.0))}
+
+
+def mms_errors(res) -> tuple[float, float, float]:
+    """(rel. L2 and Linf of the stress, Linf of u) at :data:`SVF_PROBES` against the
+    manufactured solution: ||sigma_h - sigma*||_F / max ||sigma*||_F over the probes,
+    |u_h - u*| / max |u*|."""
+    P = np.array(SVF_PROBES)
+    u_ex, s_ex = mms_fields(P.T)
+    r = res.probe(P)
+    ds = np.linalg.norm(r["stress"] - s_ex, axis=(1, 2))
+    ref = np.linalg.norm(s_ex, axis=(1, 2))
+    du = np.linalg.norm(r["u"] - u_ex.T, axis=1)
+    return (float(np.linalg.norm(ds) / np.linalg.norm(ref)), float(ds.max() / ref.max()),
+            float(du.max() / np.linalg.norm(u_ex, axis=0).max()))
+
+
+def mms_tlsph(dx: float, **material):
+    """TL-SPH on the manufactured problem (``material`` overrides E, nu, alpha of the
+    body -- a deliberately wrong one shows that the check can fail)."""
+    from sphfem.solid.backend import TLSPHSubstrate
+
+    p = {**SVF, **material}
+    Lx, Ly = SVF["size"]
+    sub = TLSPHSubstrate((-Lx / 2, -Ly), (Lx / 2, 0.0), dx, p["E"], p["nu"], p["alpha"],
+                         T0=0.0, rho=p["rho"], clamps=["bottom"])
+    res = sub.solve(dT_nodal=_svf_dT, tractions=mms_tractions(), body_force=mms_body_force)
+    return sub, res
+
+
 @register("sph-vs-fem")
 def sph_vs_fem(quick: bool) -> CaseResult:
     """2D plane-strain block 2 mm x 1 mm (top at y = 0) clamped at the bottom, a uniform
@@ -403,7 +519,12 @@ def sph_vs_fem(quick: bool) -> CaseResult:
     relaxation) at several spacings against a fine Q2 FEM reference (FEMSubstrate on the
     gmsh quad recipe); Q1 FEM at the same sizes is listed too.  Table errors: relative to
     the largest probe von Mises of the reference; the criterion takes the worst error
-    relative to each probe's own reference value."""
+    relative to each probe's own reference value.
+
+    Independent reference (variants ``* mms``): the manufactured solution of
+    :func:`mms_fields` on the same block (body force, face tractions and the same
+    temperature field), against which TL-SPH and Q1/Q2 FEM are both measured: stress
+    (3 x 3, Frobenius) and displacement at the probes."""
     from sphfem.fem import FEMSubstrate, substrate_rect
     from sphfem.solid.backend import TLSPHSubstrate
 
@@ -412,12 +533,16 @@ def sph_vs_fem(quick: bool) -> CaseResult:
     probes = np.array(SVF_PROBES)
     loads = dict(dT_nodal=_svf_dT, tractions={"top": _svf_traction})
 
-    def fem(h, element):
+    def fem(h, element, mms=False):
         mesh = substrate_rect(size=p["size"], h_fine=h, h_coarse=h, element="quad",
                               refine_center=(0.0, 0.0), refine_radius=Lx)
         with Timer() as tm:
             sub = FEMSubstrate(mesh, p["E"], p["nu"], p["alpha"], T0=0.0, element=element,
                                clamps=["bottom"])
+            if mms:
+                r = sub.solve(dT_nodal=_svf_dT, tractions=mms_tractions(),
+                              body_force=mms_body_force)
+                return mms_errors(r), sub.n_dofs, tm.s
             r = sub.solve(**loads)
             vm = r.probe(probes)["von_mises"]
         return vm, sub.n_dofs, tm.s
@@ -447,17 +572,57 @@ def sph_vs_fem(quick: bool) -> CaseResult:
                         {"vm_MPa": " ".join(f"{v / 1e6:.1f}" for v in vm)}))
     runs.append(Run("fem-Q2 reference", h_ref, ref_dofs, 0.0, 0.0, ref_s,
                     {"vm_MPa": " ".join(f"{v / 1e6:.1f}" for v in ref)}))
+    # the independent reference: the manufactured solution
+    mms = {}
+    for dx in sph_dx:
+        with Timer() as tm:
+            sub, r = mms_tlsph(dx)
+            e = mms_errors(r)
+        mms[("tlsph", dx)] = e
+        runs.append(Run("tlsph mms", dx, sub.n_particles, e[0], e[1], tm.s,
+                        {"dr_steps": r.info["steps"], "u_err": e[2]}))
+    for element, name in (("P1", "fem-Q1 mms"), ("P2", "fem-Q2 mms")):
+        for h in sph_dx:
+            e, ndof, sec = fem(h, element, mms=True)
+            mms[(name, h)] = e
+            runs.append(Run(name, h, ndof, e[0], e[1], sec, {"u_err": e[2]}))
     finest = min(sph_dx)
-    criteria = {"vm": Criterion(f"TL-SPH von Mises at the probes, worst relative error per "
-                                f"probe (dx = {finest:.3g} m)",
-                                errs[finest], 0.05)}
+    coarse = max(sph_dx)
+    t_fine, t_coarse = mms[("tlsph", finest)], mms[("tlsph", coarse)]
+    order = math.log(t_coarse[1] / t_fine[1]) / math.log(coarse / finest)
+    criteria = {
+        "vm": Criterion(f"TL-SPH von Mises at the probes vs Q2 FEM, worst relative error per "
+                        f"probe (dx = {finest:.3g} m)", errs[finest], 0.05),
+        "tlsph_mms_stress": Criterion(
+            f"TL-SPH stress vs the manufactured solution, max |sigma - sigma*|_F / max "
+            f"|sigma*|_F at the probes (dx = {finest:.3g} m)", t_fine[1], MMS_TOL),
+        "tlsph_mms_u": Criterion(
+            f"TL-SPH displacement vs the manufactured solution, max |u - u*| / max |u*| "
+            f"(dx = {finest:.3g} m)", t_fine[2], MMS_TOL),
+        "tlsph_mms_order": Criterion(
+            f"TL-SPH stress error, observed order dx = {coarse:.3g} -> {finest:.3g} m",
+            order, 0.7, ">="),
+        "fem_mms_stress": Criterion(
+            f"Q2 FEM stress vs the manufactured solution (h = {finest:.3g} m)",
+            mms[("fem-Q2 mms", finest)][1], 0.01),
+    }
     notes = [f"2D plane strain; probes {SVF_PROBES} m; reference Q2 FEM h = {h_ref:.3g} m "
              f"(von Mises {', '.join(f'{v / 1e6:.1f}' for v in ref)} MPa)",
              "TL-SPH: 3 clamped rows below the bottom face, traction t dx on the top "
              "layer, relaxation to 1e-6; FEM run times include assembly + factorisation; "
              "TL-SPH run times include the lattice set-up and numba dispatch"]
+    notes.append(
+        "mms: u_x = U s^2 sin(pi x/Lx), u_y = V s^2 cos(pi x/Lx), s = (y + Ly)/Ly, U = "
+        f"{MMS['U']:g} m, V = {MMS['V']:g} m, with the temperature field above; body force "
+        "-div sigma* and tractions sigma* n on top/left/right from the exact field (TL-SPH: "
+        "b V per particle, t dx on the face layer); err = stress (Frobenius, sigma_zz "
+        "included) at the probes relative to the largest exact one, 'u err' likewise.  It "
+        "can fail: TL-SPH with nu = 0.25 (instead of 0.21) gives a 7.8 % stress error, "
+        "with alpha 10 % high a 7.2 % displacement error (dx = 25 um; tests/test_solid.py).  "
+        "TL-SPH converges at first order (traction and clamp rows at the particle "
+        "layers); Q2 FEM at second order.")
     return CaseResult("sph-vs-fem", runs, criteria, notes, resolution_label="dx / h",
-                      extra_columns={"dr_steps": "DR steps"})
+                      extra_columns={"dr_steps": "DR steps", "u_err": "u err"})
 
 
 # ---------------------------------------------------------------------------------------
