@@ -425,17 +425,11 @@ def mms_fields(x):
 def _mms_components(x) -> dict:
     """u_x, u_y, sigma_xx, _yy, _zz, _xy of :func:`mms_fields` at ``x`` (2, ...), each
     shaped like x[0] (scikit-fem passes (2, elements, points))."""
-    p = SVF
-    lam, mu = _svf_lame()
-    Lx, Ly = p["size"]
-    k = math.pi / Lx
-    S, C = np.sin(k * x[0]), np.cos(k * x[0])
-    s = (x[1] + Ly) / Ly
-    U, V = MMS["U"], MMS["V"]
+    lam, mu, Ly, k, S, C, s, U, V = _mms_terms(x)
     exx = U * k * s**2 * C
     eyy = 2 * V * s * C / Ly
     exy = 0.5 * (2 * U * s * S / Ly - V * k * s**2 * S)
-    th = (3 * lam + 2 * mu) * p["alpha"] * _svf_dT(x)
+    th = (3 * lam + 2 * mu) * SVF["alpha"] * _svf_dT(x)
     tr = exx + eyy
     return {"ux": U * s**2 * S, "uy": V * s**2 * C, "sxx": lam * tr + 2 * mu * exx - th,
             "syy": lam * tr + 2 * mu * eyy - th, "szz": lam * tr - th, "sxy": 2 * mu * exy}
@@ -443,13 +437,8 @@ def _mms_components(x) -> dict:
 
 def mms_body_force(x):
     """b = -div sigma of :func:`mms_fields` (2, n) [N/m^3]."""
+    lam, mu, Ly, k, S, C, s, U, V = _mms_terms(x)
     p = SVF
-    lam, mu = _svf_lame()
-    Lx, Ly = p["size"]
-    k = math.pi / Lx
-    S, C = np.sin(k * x[0]), np.cos(k * x[0])
-    s = (x[1] + Ly) / Ly
-    U, V = MMS["U"], MMS["V"]
     dT = _svf_dT(x)
     g = (3 * lam + 2 * mu) * p["alpha"]
     dth_dx = g * dT * (-2 * x[0] / p["w"] ** 2)
@@ -465,10 +454,15 @@ def mms_body_force(x):
     return np.stack([bx, by])
 
 
-def _svf_lame():
+def _mms_terms(x):
+    """lam, mu, Ly, k, sin(k x), cos(k x), s, U, V of :func:`mms_fields` at ``x``."""
     from sphfem.solid.constitutive import lame
 
-    return lame(SVF["E"], SVF["nu"])
+    lam, mu = lame(SVF["E"], SVF["nu"])
+    Lx, Ly = SVF["size"]
+    k = math.pi / Lx
+    return (lam, mu, Ly, k, np.sin(k * x[0]), np.cos(k * x[0]), (x[1] + Ly) / Ly,
+            MMS["U"], MMS["V"])
 
 
 def mms_tractions() -> dict:
