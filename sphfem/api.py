@@ -67,16 +67,19 @@ class RunStopped(Exception):
 
 
 def run(scene, out, overwrite: bool = False, resume: bool = False, progress: bool = False,
-        raise_on_stop: bool = True) -> Result:
+        raise_on_stop: bool = True, keep_checkpoint: bool = False) -> Result:
     """Run ``scene`` (path, dict or Scene) to its end time, writing into folder ``out``.
 
     What ``sphfem run SCENE --out OUT`` does, returned as a :class:`Result` that keeps the
     live simulation (final particle state) next to ``summary.json`` and the output files.
     An existing non-empty ``out`` raises :class:`sphfem.output.OutputExistsError` unless
-    ``overwrite`` (delete it first) or ``resume`` (continue from its checkpoint).  A run
-    stopped by a stability guard raises :class:`RunStopped` (``raise_on_stop=False``:
-    returns the result with ``status == "stopped"``).
+    ``overwrite`` (delete it first) or ``resume`` (continue from its checkpoint, which a
+    completed run deletes unless ``keep_checkpoint``).  ``progress``: the progress bar and
+    the set-up stage lines on stderr (:mod:`sphfem.progress`), as the command line shows
+    them.  A run stopped by a stability guard raises :class:`RunStopped`
+    (``raise_on_stop=False``: returns the result with ``status == "stopped"``).
     """
+    from sphfem import progress as report
     from sphfem.output import OutputExistsError, prepare_output_dir
     from sphfem.simulation import Simulation, SimulationStopped
 
@@ -87,15 +90,21 @@ def run(scene, out, overwrite: bool = False, resume: bool = False, progress: boo
         prepare_output_dir(out, check_only=True, **opts)
     except OutputExistsError as e:
         raise OutputExistsError(str(e).replace("--overwrite", "overwrite=True")) from None
-    sim = Simulation(sc, source=source)
-    folder = prepare_output_dir(out, **opts)
+    was = report.enabled()
+    report.enable(progress or was)
     try:
-        summary = sim.run(folder, progress=progress, resume=resume)
-    except SimulationStopped as e:
-        res = Result(folder, load_result(folder).summary, sc, sim)
-        if raise_on_stop:
-            raise RunStopped(str(e), res) from None
-        return res
+        sim = Simulation(sc, source=source)
+        folder = prepare_output_dir(out, **opts)
+        try:
+            summary = sim.run(folder, progress=progress, resume=resume,
+                              keep_checkpoint=keep_checkpoint)
+        except SimulationStopped as e:
+            res = Result(folder, load_result(folder).summary, sc, sim)
+            if raise_on_stop:
+                raise RunStopped(str(e), res) from None
+            return res
+    finally:
+        report.enable(was)
     return Result(folder, summary, sc, sim)
 
 
@@ -274,18 +283,20 @@ def validation_cases() -> dict[str, str]:
             for name, fn in sorted(load_cases().items())}
 
 
-def validate(case: str, quick: bool = False, json=None, plot=None):
+def validate(case: str, quick: bool = False, json=None, plot=None, warmup: bool = True):
     """Run validation case ``case`` and return its :class:`sphfem.validation.CaseResult`
     (``.runs``: variant, resolution, particles, relative L2 / L-inf error, wall seconds;
     ``.criteria``; ``.observed_order``; ``.passed``; ``.to_json()``); the printed table is
     ``sphfem.validation.format_table(result)``.  ``json`` / ``plot``: also write the JSON
-    and the work-precision PNG (error against wall seconds) there."""
-    from sphfem.validation import load_cases, work_precision_plot, write_json
+    and the work-precision PNG (error against wall seconds) there.  ``warmup``: an untimed
+    first pass moves numba's compilation out of the timed runs
+    (:func:`sphfem.validation.run_case`), as ``sphfem validate`` does."""
+    from sphfem.validation import load_cases, run_case, work_precision_plot, write_json
 
     cases = load_cases()
     if case not in cases:
         raise ValueError(f"unknown validation case {case!r}; known: {', '.join(sorted(cases))}")
-    result = cases[case](quick)
+    result = run_case(case, quick, warmup=warmup)
     if json is not None:
         write_json(result, json)
     if plot is not None:

@@ -86,7 +86,7 @@ UNSTABLE = {
 }
 
 
-def test_stopped_run_raises_with_its_result(scratch):
+def test_stopped_run_raises_with_its_result(scratch, capfd):
     """A run whose fixed step moves particles a whole spacing per step out of the box
     stops on a guard: RunStopped carries the written result (status "stopped", the
     message, the last finite state), and raise_on_stop=False returns it instead."""
@@ -101,6 +101,12 @@ def test_stopped_run_raises_with_its_result(scratch):
     assert res.frames()[0][0] == 0.0
     again = sphfem.run(UNSTABLE, out="runs/stop", overwrite=True, raise_on_stop=False)
     assert again.status == "stopped" and again.summary["steps"] == res.summary["steps"]
+    assert "sphfem:" not in capfd.readouterr().err  # progress=False: a library is quiet
+    sphfem.run(UNSTABLE, out="runs/stop", overwrite=True, raise_on_stop=False, progress=True)
+    assert "sphfem:" in capfd.readouterr().err  # the command line's stage lines
+    from sphfem import progress
+
+    assert not progress.enabled()  # and switched off again
 
 
 def test_run_refuses_an_existing_folder_before_any_setup(scratch, monkeypatch):
