@@ -16,7 +16,7 @@ Attribute layout of a :class:`Scene`::
     scene.sph.kernel / .dx / .support_factor;  scene.support_radius (= support_factor * dx)
     scene.materials["water"].rho0 / .c / .k / .mu / .c0 / .sigma / .E / .nu / .alpha
     scene.blocks[i].name / .shape / .kind / .material / .sampling / .velocity /
-                   .temperature (K) / .dx (None = sph.dx) and, by shape,
+                   .temperature (K) / .dx (None = sph.dx) / .above / .gap and, by shape,
                    .lo .hi (box) | .center .radius (sphere) | .center .radius .length .axis
     scene.physics.modules (tuple of str)
     scene.time.t_end / .dt (None) / .cfl / .max_steps (None)
@@ -171,6 +171,16 @@ BLOCKS = Section("blocks", (
     Param("jitter", float, 0.0, ge=0.0, lt=0.5,
           doc="random disorder: each coordinate moves by a uniform amount in "
               "[-jitter dx, jitter dx] (stream (seed, i, 1)); 0 keeps the sampling as is"),
+    Param("above", str, None,
+          doc="name of an earlier block: this block is moved along the last axis (z in "
+              "3D, y in 2D) so that its lowest point lies `gap` above that block's highest "
+              "point (the given vertical coordinate of `center` or `lo`/`hi` is replaced; "
+              "see sphfem.geometry.place_above)"),
+    Param("gap", float, None, unit="m", positive=True, quantity="clearance",
+          default_doc="the support radius R",
+          doc="clearance to the block named in `above`; must be >= the kernel support "
+              "radius R = support_factor dx, so that no particle of the two blocks "
+              "interacts at t = 0 (first contact is recorded in summary.json)"),
 ), repeated=True, min_count=1, check=_check_block, doc=(
     "Bodies filled with particles, one `[[blocks]]` table each (at least one)."))
 
@@ -378,7 +388,7 @@ def _default_name(source: str) -> str:
 
 
 def _resolve_blocks(blocks, materials, domain, sph, ctx) -> tuple:
-    from sphfem.geometry import Shape
+    from sphfem.geometry import Shape, place_above
 
     out = []
     seen = {}
@@ -397,6 +407,8 @@ def _resolve_blocks(blocks, materials, domain, sph, ctx) -> tuple:
                       + (hint if hint.startswith("; did") else "")
                       + (f" (defined: {', '.join(known)})" if known
                          else "; no [materials.<name>] table is defined"))
+        b = place_above(b, {c.name: c for c in out}, sph.support_factor * sph.dx, ctx,
+                        path)
         lo, hi = Shape.from_block(b, ctx.dim).bounds()
         tol = 1e-9 * max(h - l for l, h in zip(domain.lo, domain.hi, strict=True))
         for a in range(ctx.dim):
