@@ -295,6 +295,51 @@ def _relax(x: np.ndarray, shape: Shape, dx: float, iterations: int) -> np.ndarra
 # scene blocks -> particles
 
 
+def place_above(block, placed: dict, R: float, ctx, path: str):
+    """``block`` with its ``above``/``gap`` keys resolved (the record unchanged without them).
+
+    The block is translated along the last axis (z in 3D, y in 2D, x in 1D) so that its
+    lowest point lies ``gap`` above the highest point of block ``placed[block.above]``
+    (an earlier block, already placed); ``gap`` defaults to the kernel support radius
+    ``R``.  A clearance below ``R`` is a :class:`SceneError` (``ctx.error``): the two blocks
+    would interact at t = 0.  Particles of a cell-centred lattice lie at least dx/2 inside
+    their shape, so a clearance ``>= R`` keeps every particle pair of the two blocks at
+    least ``R`` apart.  The result carries the resolved ``gap``; resolving it again is a
+    no-op, so ``Scene.to_dict()`` round-trips.
+    """
+    if block.above is None:
+        if block.gap is not None:
+            ctx.error(f"{path}.gap", "applies only with `above` (the name of the block the "
+                                     "clearance is measured from)")
+        return block
+    if block.above == block.name:
+        ctx.error(f"{path}.above", f"block {block.name!r} cannot be placed above itself")
+    if block.above not in placed:
+        known = ", ".join(repr(n) for n in placed) or "none"
+        ctx.error(f"{path}.above", f"expected the name of an earlier block, got "
+                                   f"{block.above!r} (earlier blocks: {known})")
+    gap = R if block.gap is None else block.gap
+    if gap < R * (1.0 - 1e-12):
+        ctx.error(f"{path}.gap", f"clearance {gap:g} m is less than the kernel support radius "
+                                 f"R = {R:g} m: particles of {block.name!r} and "
+                                 f"{block.above!r} would interact at t = 0 (a load before "
+                                 f"contact); use gap >= {R:g}")
+    dim = len(block.center if block.shape != "box" else block.lo)
+    ax = dim - 1
+    top = Shape.from_block(placed[block.above], dim).bounds()[1][ax]
+    low = Shape.from_block(block, dim).bounds()[0][ax]
+    shift = top + gap - low
+
+    def moved(v):
+        v = list(v)
+        v[ax] += shift
+        return tuple(v)
+
+    if block.shape == "box":
+        return block.replace(lo=moved(block.lo), hi=moved(block.hi), gap=gap)
+    return block.replace(center=moved(block.center), gap=gap)
+
+
 def block_points(scene, i: int) -> np.ndarray:
     """Positions of block ``i`` of ``scene`` (its own ``dx`` or ``[sph] dx``)."""
     b = scene.blocks[i]
