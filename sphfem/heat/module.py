@@ -16,10 +16,11 @@ would keep theirs).  Therefore every step the system is rebuilt when the list ch
 otherwise refreshed from the current positions and volumes
 (:meth:`~sphfem.heat.system.HeatSystem.refresh`: one numba pass for the Cleary form, the
 corrected form's renormalisation and limiter per particle for ``fatehi_manzari``) along
-with the explicit limit (an O(pairs) Gershgorin pass).  What stays as built until the
-next neighbour rebuild: the ghosts (they do not move; their places, sources and mirror
-ratios), the free-surface plain rows of the corrected form
-(:func:`~sphfem.heat.problem.free_surface_rows`) and the particle set.  The explicit
+with the explicit limit (an O(pairs) Gershgorin pass).  The ghosts are placed once:
+their sources, types and mirror ratios stay; ghosts of fluid particles stay in place, those
+of solid particles move with their source (:meth:`HeatConduction._move_ghosts`).  What
+stays as built until the next neighbour rebuild: the free-surface plain rows of the
+corrected form (:func:`~sphfem.heat.problem.free_surface_rows`) and the particle set.  The explicit
 limit the driver sees is that of the last refresh (the positions at the end of the
 previous step); the step's own positions may allow a slightly smaller one
 (``dt_over_fresh_limit_max`` in ``diagnostics``: the largest dt over cfl x the limit of
@@ -35,7 +36,7 @@ import numpy as np
 from numba import njit
 
 from sphfem.heat.params import HeatParams, params_from_scene
-from sphfem.particles import GHOST, ParticleSet
+from sphfem.particles import GHOST, SOLID, ParticleSet
 from sphfem.physics import PhysicsModule
 
 
@@ -84,6 +85,10 @@ class HeatConduction(PhysicsModule):
             sim.update_neighbors()
         self.ghosts = gh
         self.faces = faces
+        # ghosts of solid particles follow their source's displacement (see _move_ghosts)
+        self._follow = ps.kind[gh.source] == SOLID
+        self._ghost_x0 = gh.x.copy()
+        self._source_x0 = ps.x[gh.source].copy()
         self.refreshes = 0
         self.dt_over_limit = 0.0
         self._ghost_index = np.arange(n, n + gh.n)
@@ -155,7 +160,25 @@ class HeatConduction(PhysicsModule):
             return {"thermal_implicit": prm.implicit_dt_factor * dt0}
         return {}
 
+    def _move_ghosts(self, sim) -> None:
+        """Ghosts of solid particles move with their source: x_g = x_g0 + (x_s - x_s0)
+        (minimum image), placement-time positions x_g0, x_s0.  A deforming solid carries
+        its faces along (a heated bar's end moves by the thermal expansion), and ghosts
+        left at their placement would change the gap to the real particles next to them,
+        by u / dx of the spacing, an error that grows with resolution.  Ghosts of fluid
+        particles stay (a wall does not move with the fluid).  The list is then checked
+        again, as the driver checks it before the step, since the ghosts moved after it."""
+        ps = sim.particles
+        f = self._follow
+        d = ps.x[self._ghost_source[f]] - self._source_x0[f]
+        per = sim.period
+        d -= np.where(per > 0, per * np.floor(d / np.where(per > 0, per, 1.0) + 0.5), 0.0)
+        ps.x[self._ghost_index[f]] = self._ghost_x0[f] + d
+        sim.ensure_neighbors()
+
     def step(self, sim, dt: float) -> None:
+        if sim.moving and self._follow.any():
+            self._move_ghosts(sim)
         if sim.nbrs is not self._nbrs:  # a new list (or a re-sort): build on it
             self._build(sim)
         elif sim.moving:  # same list, moved particles: conductances from the positions
