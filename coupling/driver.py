@@ -31,12 +31,16 @@ import logging
 import math
 import time
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from coupling.sensors import SensorSet, Surface
 from sphfem.particles import FLUID
 from sphfem.physics import PhysicsModule
+
+if TYPE_CHECKING:
+    from sphfem.simulation import Simulation
 
 logger = logging.getLogger(__name__)
 
@@ -202,6 +206,9 @@ class CouplingDriver:
                "wall_s": dict(self.timings),
                "backend": self.backend.diagnostics()}
         if self.history:
+            h0 = self.history[0]  # the state before the first step: no load if no contact
+            out["start"] = {"t": h0["t"], "peak_von_mises_Pa": h0["peak_von_mises"],
+                            "force_sensors": h0["force_sensors"]}
             h = self.history[-1]
             out["last"] = {k: h[k] for k in ("t", "force_sensors", "force_load",
                                              "unassigned_force", "mean_stress") if k in h}
@@ -288,6 +295,49 @@ def build_substrate(scene, cfg, region_lo, region_hi, T0: float):
     return sub
 
 
+def fluid_region_distance(ps, region_of, period=None, limit: float = np.inf) -> float:
+    """Smallest distance [m] between a fluid particle and a particle of the coupled region.
+
+    ``region_of(sub)`` is the region test (``SensorSet.region_mask``) of a particle subset
+    ``sub`` (attributes ``x``, ``kind``, ``material``, ``n``); ``period`` the periodic
+    lengths per axis (0 = open; minimum image on the others); distances beyond ``limit``
+    are reported as ``inf``.  Only particles within ``limit`` of the fluid's bounding box
+    are tested, so the pre-contact check of every step costs one pass over the positions.
+    """
+    from types import SimpleNamespace
+
+    from scipy.spatial import cKDTree
+
+    fl = ps.kind == FLUID
+    if not fl.any():
+        return math.inf
+    xf = ps.x[fl]
+    periodic = period is not None and np.any(np.asarray(period) > 0)
+    cand = ~fl
+    if math.isfinite(limit) and not periodic:
+        lo, hi = xf.min(axis=0) - limit, xf.max(axis=0) + limit
+        cand &= np.all((ps.x >= lo) & (ps.x <= hi), axis=1)
+    idx = np.nonzero(cand)[0]
+    if idx.size == 0:
+        return math.inf
+    sub = SimpleNamespace(x=ps.x[idx], kind=ps.kind[idx], material=ps.material[idx],
+                          n=int(idx.size))
+    xr = sub.x[region_of(sub)]
+    if xr.shape[0] == 0:
+        return math.inf
+    if periodic:  # torus on the periodic axes; open axes get a box no pair wraps around
+        x_all = np.concatenate([xf, xr])
+        base = x_all.min(axis=0)
+        span = np.ptp(x_all, axis=0)
+        box = np.where(np.asarray(period) > 0, period, 3.0 * span + 1.0)
+        xf, xr = np.mod(xf - base, box), np.mod(xr - base, box)
+        tree = cKDTree(xr, boxsize=box)
+    else:
+        tree = cKDTree(xr)
+    d, _ = tree.query(xf, k=1, distance_upper_bound=limit)
+    return float(d.min())
+
+
 class CouplingModule(PhysicsModule):
     """The ``coupling`` physics module: reads ``scene.coupling`` (see
     :mod:`coupling.scene_section`); list it after ``fluid`` and ``heat``."""
@@ -300,6 +350,11 @@ class CouplingModule(PhysicsModule):
         self.driver = None
         self.steps = 0
         self.ledger = None
+        #: first contact: the end of the first step at which a fluid particle is closer than
+        #: the support radius R to a particle of the coupled region (the fluid's forces on
+        #: the substrate start there); None until then
+        self.contact = None
+        self.clearance0 = None
 
     def init(self, sim) -> None:
         from coupling.backends import make_backend
@@ -348,6 +403,13 @@ class CouplingModule(PhysicsModule):
         if "c_heat" in ps and np.all(ps.c_heat[region] > 0):
             self.ledger = HeatLedger(ps, region)
         self._U, self._kappa = self._scales(sim, ps)
+        d0 = fluid_region_distance(ps, sensors.region_mask, sim.period)
+        self.clearance0 = d0 - sim.R if math.isfinite(d0) else None
+        if d0 < sim.R:
+            self.contact = {"t_s": float(sim.t), "step": int(sim.step_count)}
+            logger.warning("coupling: fluid within the support radius of the substrate at the "
+                           "start (t = %g s): the substrate is loaded before impact; place "
+                           "the fluid with [[blocks]] above/gap", sim.t)
         self.driver.couple(ps, sim.t, sim.step_count, self._folder(sim))
         logger.info("coupling: %d region particles, %d sensors, backend %s", self.region_count,
                     self.sensor_count, cfg.backend)
@@ -377,6 +439,12 @@ class CouplingModule(PhysicsModule):
             logger.info("coupling: one substrate solve every %d steps", self.driver.every_k)
         self.steps += 1
         t_new = sim.t + dt
+        if self.contact is None and self.clearance0 is not None:
+            d = fluid_region_distance(sim.particles, self.driver.sensors.region_mask,
+                                      sim.period, limit=sim.R)
+            if d < sim.R:
+                self.contact = {"t_s": float(t_new), "step": int(sim.step_count + 1)}
+                logger.info("coupling: first contact at t = %g s", t_new)
         tm = self.scene.time
         last = t_new >= tm.t_end * (1 - 1e-12) or (
             tm.max_steps is not None and sim.step_count + 1 >= tm.max_steps)
@@ -385,10 +453,24 @@ class CouplingModule(PhysicsModule):
     def diagnostics(self, sim) -> dict:
         d = {"region_particles": self.region_count, "sensors": self.sensor_count,
              **self.driver.summary()}
+        d["contact"] = self.contact_record()
+        d["t_contact_s"] = d["contact"]["t_s"]
+        tp, tc = d.get("peak_von_mises_t_s"), d["t_contact_s"]
+        d["peak_von_mises_t_after_contact_s"] = (tp - tc if tp is not None and tc is not None
+                                                 else None)
         if self.ledger is not None:
             region = self.driver.sensors.region_mask(sim.particles)
             d["heat"] = self.ledger.figures(sim.particles, region)
         return d
+
+
+    def contact_record(self) -> dict:
+        """First contact (``t_s``, ``step``; None if the fluid never came within R) with
+        the clearance at the start, the particle distance beyond R the fluid had to travel."""
+        c = self.contact or {"t_s": None, "step": None}
+        return {**c, "clearance_at_start_m": self.clearance0,
+                "criterion": "end of the first step at which a fluid particle is closer than "
+                             "the support radius R to a particle of the coupled region"}
 
 
 def default_probes(mesh, plane, region_lo, region_hi, fractions=(0.0, 0.125, 0.25, 0.5, 0.75)):
@@ -405,9 +487,11 @@ def default_probes(mesh, plane, region_lo, region_hi, fractions=(0.0, 0.125, 0.2
     return np.array(pts)
 
 
-def run_scene(scene, out, progress: bool = False, source=None) -> dict:
-    """Build and run ``scene`` with the coupling's outputs in ``out`` (the driver exposes
-    its output folder to modules as ``sim.out``)."""
+def run_scene(scene, out, progress: bool = False, source=None) -> tuple[Simulation, dict]:
+    """Build and run ``scene`` with the coupling's outputs in ``out``; return ``(sim,
+    summary)``: the finished :class:`sphfem.simulation.Simulation` (particles, modules) and
+    the summary dict also written to ``out/summary.json``.  The driver exposes its output
+    folder to modules as ``sim.out``."""
     from sphfem.simulation import Simulation
 
     out = Path(out)
