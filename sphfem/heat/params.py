@@ -1,7 +1,8 @@
-"""Parameters of the heat-conduction module (until the scene schema carries a ``[heat]``
-section, a scene passes a :class:`HeatParams` as ``scene.heat``).
+"""Parameters of the heat-conduction module: :class:`HeatParams`, built from a scene's
+``[heat]`` section (:mod:`sphfem.heat.scene_section`, docs/scenes.md) and its materials by
+:func:`params_from_scene`, or passed directly to ``HeatConduction(scene, params)``.
 
-Keys and units (the future ``[heat]`` section uses the same names):
+Keys and units (the same names as the ``[heat]`` keys):
 
 ``laplacian``          "cleary" (Cleary 1998, harmonic-mean k, conservative) or
                        "fatehi_manzari" (corrected, exact for quadratics; per-particle
@@ -14,6 +15,10 @@ Keys and units (the future ``[heat]`` section uses the same names):
 ``dt``                 fixed heat step [s] (overrides ``implicit_dt_factor``).
 ``cfl``                safety factor on the explicit limit (<= 1) [-].
 ``startup``            Crank-Nicolson steps replaced by two backward-Euler half steps.
+``bound_margin``       guard: stop when T leaves the initial/wall range widened by this
+                       fraction of its width (maximum principle) [-].
+``positivity_limiter`` corrected form: blend rows with a negative weight towards the plain
+                       row until every weight is >= 0.
 ``free_surface_plain`` corrected form only: particles with number density below this (and
                        all within R of a free face) use the plain rows (zero-flux free
                        surface; the corrected operator has growing modes there otherwise).
