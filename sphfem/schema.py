@@ -3,9 +3,12 @@
 A :class:`Section` is a TOML table (``[sph]``), an array of tables (``[[blocks]]``,
 ``repeated=True``) or a table of named tables (``[materials.<name>]``, ``open_keys=True``).
 It holds :class:`Param` declarations with type, unit, default, bounds and a one-line
-description, and optionally nested sub-sections (``[fluid.viscosity]``).  Validation turns
-the parsed TOML dict into read-only :class:`Record` objects with every default filled in and
-raises :class:`SceneError` -- one line naming the file and the key -- on the first mistake.
+description, and optionally nested sub-sections (``[coupling.mesh]``,
+``[[heat.boundaries]]``).  Validation turns the parsed TOML dict into read-only
+:class:`Record` objects with every default filled in and raises :class:`SceneError` -- one
+line naming the file and the key -- on the first mistake.  A key declared with ``when=``
+is present in the record only when its condition holds (read it with ``"key" in rec``
+first, as cross-key checks must).
 
 Registries (global, filled at import time):
 
@@ -13,11 +16,10 @@ Registries (global, filled at import time):
   ``sph``, ``materials``, ``blocks``, ``physics``, ``time``, ``output``) are registered by
   :mod:`sphfem.scene`.
 * :data:`MODULES` -- the physics-module names a scene may list in ``[physics] modules``.
-  A physics package registers itself, and optionally its own section, with::
+  A physics package registers itself, and optionally its own section, in its
+  ``__init__`` (the section declared in its ``scene_section.py``), e.g. sphfem.heat::
 
-      register_module("heat", Section("heat", (Param("laplacian", str, "cleary",
-                      choices=("cleary", "fatehi_manzari"), doc="..."),), doc="..."),
-                      target="sphfem.heat.conduction:HeatConduction")
+      register_module("heat", HEAT, target="sphfem.heat.module:HeatConduction")
 
   A module's section may only appear in a scene that lists the module.
 
@@ -216,7 +218,7 @@ class Param:
 class Section:
     """A scene table: ``[name]``, ``[[name]]`` (``repeated``) or ``[name.<key>]`` (``open_keys``).
 
-    ``subsections`` are nested tables (``[fluid.viscosity]``); a missing sub-section gets its
+    ``subsections`` are nested tables (``[coupling.mesh]``); a missing sub-section gets its
     defaults.  ``check(record, ctx, path)`` runs after the keys are validated and may call
     ``ctx.error(key, message)`` for cross-key rules.  ``module`` is set by
     :func:`register_module`.  ``required``: the table itself must be present.
