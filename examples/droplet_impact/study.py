@@ -1,25 +1,31 @@
 """Droplet-impact study (Park 2019 sec. 2.4.6): run the coupled scene, draw the pictures.
 
     python examples/droplet_impact/study.py --out DIR [--scene droplet_impact.toml]
-    python examples/droplet_impact/study.py --out DIR --plots-only      # redraw an old run
+    python examples/droplet_impact/study.py --out DIR --plots-only      # redraw a run (its
+                                                                        # own recorded scene)
     python examples/droplet_impact/study.py --out DIR --sweep speed=25,50 temperature=60,100 \\
         material=alumina,silicon                                       # table of peak stress
 
 One run writes, into DIR (next to the run's particle series, summary.json and
-``substrate/`` folder of the coupling):
+``substrate/`` folder of the coupling).  Times are counted from the first contact
+(``t_contact_s`` of the coupling in summary.json) in units of tc = D / v:
 
-* ``droplet_shape.png`` -- droplet side view (slice |y| < dx) coloured by temperature at
-  t/tc = 0.25, 0.75, 1.25, 1.75 (tc = D / v), thesis figure 2.10;
+* ``droplet_shape.png`` -- side view (slice |y| < 0.75 dx) at (t - t_contact)/tc ~ 0.25,
+  0.75, 1.25, 1.75, cropped to the droplet; the droplet coloured on its own temperature
+  range, the substrate's top particle layers on theirs (thesis figure 2.10);
 * ``surface_maps.png`` -- substrate surface temperature and von Mises stress at the last
-  output (1.75 tc), figures 2.11-2.12;
+  output, over the spread droplet (figures 2.11-2.12);
 * ``depth_profiles.png`` -- stress components and temperature against depth under the
-  impact point at the last coupling step, figure 2.13;
+  impact point at the last coupling step: the L2-recovered nodal fields along the line,
+  the element (constant P1) von Mises stress, the probe values, and the element faces the
+  line crosses, i.e. what the mesh resolves (figure 2.13);
 * ``surface_temperature.png`` -- temperature of the impact point and the largest
   substrate temperature against time, figure 2.14;
-* ``summary.json`` gains a ``study`` entry: peak von Mises stress (value, place, time),
-  contact-patch diameter / D (the heated patch, where the surface temperature rise exceeds
-  half its maximum), wetted diameter / D, maximum spreading ratio (largest lateral extent
-  of the fluid / D over the outputs), heat transferred to the substrate, wall time.
+* ``summary.json`` gains a ``study`` entry: peak von Mises stress (value, place, time, and
+  time after contact), contact-patch diameter / D (the heated patch, where the surface
+  temperature rise exceeds half its maximum), wetted diameter / D, maximum spreading ratio
+  (largest lateral extent of the fluid / D over the outputs), heat transferred to the
+  substrate, wall time.
 
 Sweep mode runs one case per combination (impact speed [m/s], droplet temperature [C],
 substrate material from MATERIALS) under DIR/case_*, with a progress bar, and writes
@@ -78,43 +84,106 @@ def _read_particles(out: Path):
     return [(t, read_quiet(f)) for t, f in frames]
 
 
+def case_scales(data: dict) -> tuple[float, float, float]:
+    """Droplet diameter D [m], impact speed v [m/s] and tc = D / v [s] of a scene dict."""
+    drop = _droplet(data)
+    D = 2 * drop["radius"]
+    v = float(np.linalg.norm(drop["velocity"]))
+    return D, v, D / v
+
+
+def _line_fields(sub_vtu, depths, xy=(0.0, 0.0)):
+    """Nodal (L2-recovered) stress and dT interpolated (P1) along the vertical line under
+    ``xy`` at ``depths`` [m] below the top face, the element (constant P1) stress there, and
+    the element index of each point (its changes are the element faces the line crosses)."""
+    from skfem import CellBasis, ElementTetP1, MeshTet1
+
+    p = np.ascontiguousarray(sub_vtu.points.T)
+    t = np.ascontiguousarray(sub_vtu.cells_dict["tetra"].T)
+    mesh = MeshTet1(p, t)
+    X = np.zeros((3, len(depths)))
+    X[0], X[1] = xy
+    X[2] = p[2].max() - np.asarray(depths)
+    P = CellBasis(mesh, ElementTetP1()).probes(X)
+    nodal = np.asarray(sub_vtu.point_data["stress"]).reshape(-1, 3, 3)
+    S = np.einsum("pn,nij->pij", P.toarray(), nodal)
+    dT = P @ np.asarray(sub_vtu.point_data["dT"]).ravel()
+    cells = mesh.element_finder()(*X)
+    S_el = np.asarray(sub_vtu.cell_data["stress_elem"][0]).reshape(-1, 3, 3)[cells]
+    return S, dT, S_el, cells
+
+
+def _von_mises(S):
+    dev = S - np.einsum("...ii->...", S)[..., None, None] / 3 * np.eye(3)
+    return np.sqrt(1.5 * np.einsum("...ij,...ij->...", dev, dev))
+
+
 def analyse(out: Path, data: dict) -> dict:
-    """Draw the PNGs and add the ``study`` entry to DIR/summary.json."""
+    """Draw the PNGs and add the ``study`` entry to DIR/summary.json.
+
+    ``data``: the run's scene as a dict (the resolved ``summary.json["scene"]`` or the
+    parsed TOML).  Times are shown after the first contact ``t_contact_s`` recorded by the
+    coupling (0 for runs made before it was recorded), in units of tc = D / v.
+    """
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
+    from matplotlib.ticker import MaxNLocator
 
     summary = json.loads((out / "summary.json").read_text())
-    drop = _droplet(data)
-    D = 2 * drop["radius"]
-    v = float(np.linalg.norm(drop["velocity"]))
-    tc = D / v
+    D, v, tc = case_scales(data)
     dx = data["sph"]["dx"]
+    c = summary["diagnostics"]["coupling"]
+    t0 = c.get("t_contact_s") or 0.0  # time origin: first contact
     frames = _read_particles(out)
     kind_of = lambda m: np.asarray(m.point_data["kind"]).ravel()  # noqa: E731
+    temp_of = lambda m: np.asarray(m.point_data["T"]).ravel() - 273.15  # noqa: E731
 
-    # -- droplet shape and temperature -------------------------------------------------
-    want = [0.25, 0.75, 1.25, 1.75]
-    fig, axes = plt.subplots(1, len(want), figsize=(4 * len(want), 3.2), sharey=True)
+    # -- droplet shape and temperature (side view, slice |y| < 0.75 dx) -----------------
     spread = 0.0
     for _t, m in frames:
         fl = kind_of(m) == 0
         r = np.linalg.norm(m.points[fl, :2], axis=1)
         spread = max(spread, 2 * float(r.max()) / D if fl.any() else 0.0)
-    for ax, w in zip(axes, want, strict=True):
-        t, m = min(frames, key=lambda f: abs(f[0] / tc - w))
-        fl = kind_of(m) == 0
-        sl = fl & (np.abs(m.points[:, 1]) < 0.75 * dx)
-        T = np.asarray(m.point_data["T"]).ravel() - 273.15
-        sc = ax.scatter(m.points[sl, 0] * 1e3, m.points[sl, 2] * 1e3, c=T[sl], s=6,
-                        cmap="inferno", vmin=20, vmax=T[fl].max() if fl.any() else 100)
-        ax.axhline(0.0, color="k", lw=0.8)
-        ax.set_title(f"t/tc = {t / tc:.2f}")
-        ax.set_xlabel("x [mm]")
+    want = [0.25, 0.75, 1.25, 1.75]
+    picked = [min(frames, key=lambda f, w=w: abs((f[0] - t0) / tc - w)) for w in want]
+    picked = list({id(f): f for f in picked}.values())  # a short run may repeat a frame
+    sl_f, sl_s = [], []
+    for _t, m in picked:
+        k, y = kind_of(m), np.abs(m.points[:, 1]) < 0.75 * dx
+        sl_f.append(y & (k == 0))
+        sl_s.append(y & ((k == 1) | (k == 2)) & (m.points[:, 2] > -5 * dx))
+    Tf = np.concatenate([temp_of(m)[s] for (_t, m), s in zip(picked, sl_f, strict=True)])
+    Ts = np.concatenate([temp_of(m)[s] for (_t, m), s in zip(picked, sl_s, strict=True)])
+    xmax = max(float(np.abs(m.points[s, 0]).max()) for (_t, m), s in
+               zip(picked, sl_f, strict=True)) + 2 * dx
+    zlo = -5 * dx
+    ztop = [float(m.points[s, 2].max()) + dx for (_t, m), s in zip(picked, sl_f, strict=True)]
+    width = 9.0
+    heights = [width * 0.78 * (zt - zlo) / (2 * xmax) for zt in ztop]
+    fig, axes = plt.subplots(len(picked), 1, figsize=(width, sum(heights) + 0.5 * len(picked)
+                                                      + 0.6),
+                             gridspec_kw={"height_ratios": heights}, sharex=True,
+                             squeeze=False, layout="constrained")
+    axes = axes[:, 0]
+    norm_f = (float(Tf.min()), float(Tf.max())) if Tf.size else (0.0, 100.0)
+    norm_s = (float(Ts.min()), float(Ts.max())) if Ts.size else (0.0, 1.0)
+    for ax, (t, m), sf, ss, zt in zip(axes, picked, sl_f, sl_s, ztop, strict=True):
+        T = temp_of(m)
+        hs = ax.scatter(m.points[ss, 0] * 1e3, m.points[ss, 2] * 1e3, c=T[ss], s=7,
+                        marker="s", cmap="viridis", vmin=norm_s[0], vmax=norm_s[1])
+        hf = ax.scatter(m.points[sf, 0] * 1e3, m.points[sf, 2] * 1e3, c=T[sf], s=7,
+                        cmap="inferno", vmin=norm_f[0], vmax=norm_f[1])
+        ax.axhline(0.0, color="k", lw=0.6)
+        ax.set_xlim(-xmax * 1e3, xmax * 1e3)
+        ax.set_ylim(zlo * 1e3, zt * 1e3)
         ax.set_aspect("equal")
-    axes[0].set_ylabel("z [mm]")
-    fig.colorbar(sc, ax=axes, label="T [C]", shrink=0.8)
+        ax.set_ylabel("z [mm]")
+        ax.set_title(f"(t - t_contact) / tc = {(t - t0) / tc:.2f}", fontsize=9, loc="left")
+    axes[-1].set_xlabel("x [mm]  (slice |y| < 0.75 dx)")
+    fig.colorbar(hf, ax=axes, label="droplet T [C]", fraction=0.04, pad=0.01)
+    fig.colorbar(hs, ax=axes, label="substrate T [C]", fraction=0.04, pad=0.01)
     fig.savefig(out / "droplet_shape.png", dpi=120)
     plt.close(fig)
 
@@ -124,28 +193,32 @@ def analyse(out: Path, data: dict) -> dict:
     sub_dir = out / "substrate"
     vtus = sorted(sub_dir.glob("substrate_*.vtu"))
     hist = json.loads((sub_dir / "history.json").read_text())
-    T0 = None
     patch = wetted = None
-    if vtus:
-        sm = read_quiet(vtus[-1])
+    sm = read_quiet(vtus[-1]) if vtus else None
+    T0 = (data.get("coupling") or {}).get("T0") or 293.15
+    if sm is not None:
         P = sm.points
         top = np.abs(P[:, 2] - P[:, 2].max()) < 1e-12
         dT = np.asarray(sm.point_data["dT"]).ravel()
         vm = np.asarray(sm.point_data["von_mises"]).ravel()
-        T0 = summary["scene"]["coupling"].get("T0") or 293.15
-        lim = 3 * D
+        lim = min(3 * D, 1.3 * spread * D / 2 + 4 * dx)
         near = top & (np.abs(P[:, 0]) < lim) & (np.abs(P[:, 1]) < lim)
-        fig, axes = plt.subplots(1, 2, figsize=(11, 4.5))
+        fig, axes = plt.subplots(1, 2, figsize=(11, 4.6), layout="constrained")
         for ax, val, lab, cm in ((axes[0], dT[near] + T0 - 273.15, "T [C]", "inferno"),
                                  (axes[1], vm[near] / 1e6, "von Mises [MPa]", "viridis")):
-            tc_ = ax.tricontourf(P[near, 0] * 1e3, P[near, 1] * 1e3, val, 30, cmap=cm)
+            levels = MaxNLocator(24).tick_values(val.min(), val.max())
+            # extend="both": values a round-off outside the levels are filled, not holes
+            tc_ = ax.tricontourf(P[near, 0] * 1e3, P[near, 1] * 1e3, val, levels=levels,
+                                 cmap=cm, extend="both")
+            ax.plot(P[near, 0] * 1e3, P[near, 1] * 1e3, ",", color="w", alpha=0.5)
             fig.colorbar(tc_, ax=ax, label=lab)
             ax.set_aspect("equal")
             ax.set_xlabel("x [mm]")
             ax.set_ylabel("y [mm]")
-        axes[0].set_title(f"surface temperature, t/tc = {hist['history'][-1]['t'] / tc:.2f}")
-        axes[1].set_title("surface von Mises stress")
-        fig.tight_layout()
+        t_last = hist["history"][-1]["t"]
+        axes[0].set_title(f"surface temperature, (t - t_contact)/tc = {(t_last - t0) / tc:.2f}"
+                          "\n(dots: FEM surface nodes)", fontsize=10)
+        axes[1].set_title("surface von Mises stress (nodal, recovered)", fontsize=10)
         fig.savefig(out / "surface_maps.png", dpi=120)
         plt.close(fig)
         r = np.linalg.norm(P[top, :2], axis=1)
@@ -162,42 +235,72 @@ def analyse(out: Path, data: dict) -> dict:
     probes = np.asarray(hist["probes"])
     last = hist["history"][-1]
     depth = -probes[:, 2] * 1e6
-    fig, (a1, a2) = plt.subplots(1, 2, figsize=(10, 4.5), sharey=True)
-    for c in ("xx", "yy", "zz", "xz", "von_mises"):
-        a1.plot([p[c] / 1e6 for p in last["probes"]], depth, "o-", label=c)
+    fig, (a1, a2) = plt.subplots(1, 2, figsize=(11, 5.2), sharey=True,
+                                 gridspec_kw={"width_ratios": [2.2, 1]}, layout="constrained")
+    comps = (("xx", 0, 0), ("yy", 1, 1), ("zz", 2, 2), ("xz", 0, 2))
+    if sm is not None and sm.point_data.get("stress") is not None and (
+            "tetra" in sm.cells_dict):
+        thick = float(np.ptp(sm.points[:, 2]))
+        zz = np.concatenate([np.linspace(0, 40e-6, 400), np.geomspace(40e-6, thick, 200)[1:]])
+        zz = np.clip(zz, 1e-9 * thick, thick * (1 - 1e-9))
+        S, dTl, S_el, cells = _line_fields(sm, zz)
+        faces = 0.5 * (zz[1:] + zz[:-1])[np.diff(cells) != 0] * 1e6
+        h_top = float(faces[0]) if faces.size else thick * 1e6
+        for k, (name, i, j) in enumerate(comps):
+            a1.plot(S[:, i, j] / 1e6, zz * 1e6, "-", color=f"C{k}", label=f"s_{name}")
+        a1.plot(_von_mises(S) / 1e6, zz * 1e6, "-", color="k", lw=1.5, label="von Mises")
+        a1.plot(_von_mises(S_el) / 1e6, zz * 1e6, ":", color="k", lw=1,
+                label="von Mises, element (constant per tet)")
+        for f in faces:
+            for ax in (a1, a2):
+                ax.axhline(f, color="0.8", lw=0.5, zorder=0)
+        a2.plot(dTl + T0 - 273.15, zz * 1e6, "-", color="C3", label="nodal T (mapped)")
+        res = (f"FEM P1 tets; grey lines: element faces on this line (first at "
+               f"{h_top:.1f} um); SPH dx = {dx * 1e6:.3g} um.\nLines: L2-recovered nodal "
+               f"stress; markers: probe values (constant in each element). Variation within "
+               f"one element is not resolved.")
+        fig.suptitle(res, fontsize=8.5)
+    for k, (name, _i, _j) in enumerate(comps):
+        a1.plot([p[name] / 1e6 for p in last["probes"]], depth, "o", color=f"C{k}", ms=4)
+    a1.plot([p["von_mises"] / 1e6 for p in last["probes"]], depth, "o", color="k", ms=4,
+            label="probes")
+    a1.set_yscale("symlog", linthresh=20.0)
+    a1.set_ylim(float(max(depth.max(), 1.0)) * 1.05, 0.0)
     a1.set_xlabel("stress [MPa]")
-    a1.set_ylabel("depth under the impact point [um]")
-    a1.invert_yaxis()
-    a1.legend()
-    a1.set_title(f"t/tc = {last['t'] / tc:.2f}")
-    a2.plot([p["T"] - 273.15 for p in last["probes"]], depth, "o-", color="C3")
+    a1.set_ylabel("depth under the impact point [um] (linear to 20 um, then log)")
+    a1.legend(fontsize=8)
+    a1.set_title(f"(t - t_contact) / tc = {(last['t'] - t0) / tc:.2f}", fontsize=10)
+    a2.plot([p["T"] - 273.15 for p in last["probes"]], depth, "o", color="C3", ms=4,
+            label="probes")
     a2.set_xlabel("T [C]")
-    fig.tight_layout()
+    a2.legend(fontsize=8)
     fig.savefig(out / "depth_profiles.png", dpi=120)
     plt.close(fig)
 
     # -- surface temperature against time ------------------------------------------------
-    ts = np.array([h["t"] for h in hist["history"]]) / tc
-    fig, ax = plt.subplots(figsize=(6, 4))
-    ax.plot(ts, [h["probes"][0]["T"] - 273.15 for h in hist["history"]], "o-",
+    ts = (np.array([h["t"] for h in hist["history"]]) - t0) / tc
+    fig, ax = plt.subplots(figsize=(6, 4), layout="constrained")
+    ax.plot(ts, [h["probes"][0]["T"] - 273.15 for h in hist["history"]], "o-", ms=3,
             label="impact point (FEM node field)")
     ax.plot(ts, [h.get("T_region_max", np.nan) - 273.15 for h in hist["history"]], "s--",
-            label="hottest substrate particle")
-    ax.set_xlabel("t / tc")
+            ms=3, label="hottest substrate particle")
+    ax.axvline(0.0, color="0.6", lw=0.8)
+    ax.set_xlabel("(t - t_contact) / tc")
     ax.set_ylabel("T [C]")
     ax.legend()
     ax.grid(alpha=0.3)
-    fig.tight_layout()
     fig.savefig(out / "surface_temperature.png", dpi=120)
     plt.close(fig)
 
-    c = summary["diagnostics"]["coupling"]
+    tp = c["peak_von_mises_t_s"]
     study = {
         "tc_s": tc, "D_m": D, "impact_speed_m_s": v,
+        "t_contact_s": c.get("t_contact_s"),
         "peak_von_mises_Pa": c["peak_von_mises_Pa"],
         "peak_von_mises_location_m": c["peak_von_mises_location_m"],
-        "peak_von_mises_t_s": c["peak_von_mises_t_s"],
-        "peak_von_mises_t_over_tc": (c["peak_von_mises_t_s"] or 0.0) / tc,
+        "peak_von_mises_t_s": tp,
+        "peak_von_mises_t_after_contact_s": (tp - t0) if tp is not None else None,
+        "peak_von_mises_t_after_contact_over_tc": (tp - t0) / tc if tp is not None else None,
         "contact_patch_diameter_over_D": patch,
         "wetted_diameter_over_D": wetted,
         "max_spreading_ratio": spread,
@@ -212,6 +315,17 @@ def analyse(out: Path, data: dict) -> dict:
     summary["study"] = study
     write_json(out / "summary.json", summary)
     return study
+
+
+def recorded_scene(out: Path) -> dict:
+    """The scene a finished run used: ``summary.json["scene"]`` (resolved, kelvin)."""
+    path = out / "summary.json"
+    if not path.exists():
+        raise SystemExit(f"study: {path} not found: --plots-only needs a finished run")
+    summary = json.loads(path.read_text())
+    if "scene" not in summary:
+        raise SystemExit(f"study: {path} records no scene; pass --scene")
+    return summary["scene"]
 
 
 def sweep(base: dict, out: Path, specs: list[str]) -> list[dict]:
@@ -237,11 +351,16 @@ def sweep(base: dict, out: Path, specs: list[str]) -> list[dict]:
         sub_mat = data["coupling"]["material"]
         data["materials"][sub_mat] = {**data["materials"][sub_mat], **MATERIALS[mat]}
         D = 2 * drop["radius"]
-        data["time"]["t_end"] = 1.75 * D / speed
+        # the flight to first contact: clearance beyond R plus at most one spacing of
+        # particle offsets (gap = R by default), then 1.75 tc
+        R = data["sph"]["dx"] * data["sph"].get("support_factor", 3.0)
+        gap = drop.get("gap") or R
+        flight = (gap - R + data["sph"]["dx"]) / speed if drop.get("above") else 0.0
+        data["time"]["t_end"] = flight + 1.75 * D / speed
         data["output"]["every"] = 0.25 * D / speed
         case = out / f"case_v{speed:g}_T{temp:g}_{mat}"
         s = run_case(data, case)
-        st = analyse(case, data)
+        st = analyse(case, recorded_scene(case))
         rows.append({"speed_m_s": speed, "droplet_T_C": temp, "material": mat,
                      "peak_von_mises_Pa": st["peak_von_mises_Pa"],
                      "peak_t_over_tc": st["peak_von_mises_t_over_tc"],
@@ -262,22 +381,36 @@ def sweep(base: dict, out: Path, specs: list[str]) -> list[dict]:
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    p.add_argument("--scene", default=str(HERE / "droplet_impact.toml"))
+    p.add_argument("--scene", default=None,
+                   help="scene file (default: droplet_impact.toml; with --plots-only: the "
+                        "scene recorded in DIR/summary.json)")
     p.add_argument("--out", required=True, help="output folder (must not exist, or --plots-only)")
     p.add_argument("--plots-only", action="store_true", help="redraw an existing run")
     p.add_argument("--sweep", nargs="+", metavar="AXIS=V1,V2",
                    help="speed=..., temperature=... [C], material=...")
     a = p.parse_args(argv)
-    base = tomllib.loads(Path(a.scene).read_text())
     out = Path(a.out)
+    if a.plots_only:  # the run's own scene, never a default that may differ from it
+        base = recorded_scene(out)
+        if a.scene is not None:
+            from sphfem.scene import parse_scene
+
+            given = parse_scene(tomllib.loads(Path(a.scene).read_text()), source=a.scene)
+            if given != parse_scene(base, source=str(out / "summary.json")):
+                raise SystemExit(f"study: {a.scene} is not the scene of the run in {out} "
+                                 f"(see its summary.json); drop --scene to use the run's own")
+        st = analyse(out, base)
+        print(json.dumps(st, indent=1))
+        return 0
+    scene_file = a.scene or str(HERE / "droplet_impact.toml")
+    base = tomllib.loads(Path(scene_file).read_text())
     if a.sweep:
         sweep(base, out, a.sweep)
         return 0
-    if not a.plots_only:
-        if out.exists() and any(out.iterdir()):
-            raise SystemExit(f"study: {out} exists and is not empty (use another --out)")
-        run_case(base, out, source=a.scene)
-    st = analyse(out, base)
+    if out.exists() and any(out.iterdir()):
+        raise SystemExit(f"study: {out} exists and is not empty (use another --out)")
+    run_case(base, out, source=scene_file)
+    st = analyse(out, recorded_scene(out))
     print(json.dumps(st, indent=1))
     return 0
 
