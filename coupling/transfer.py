@@ -262,7 +262,7 @@ class TemperatureMap:
                 "covered": int(self.covered.sum()), "mls_fallbacks": self.fallbacks}
 
 
-def particle_cells(X, vol, tree=None, k: int | None = None) -> np.ndarray:
+def particle_cells(X, vol, tree=None, k: int | None = None, chunk: int = 4096) -> np.ndarray:
     """Per-axis cell sides h (n, dim) of particles ``X`` (n, dim) with volumes ``vol``:
     h_a = min |dx_a| over the neighbours in the cone of axis a (|dx_a| >= |dx_b|, among the
     ``k`` nearest, default 4^dim), rescaled so that prod_a h_a = V (module docstring).  An
@@ -275,11 +275,13 @@ def particle_cells(X, vol, tree=None, k: int | None = None) -> np.ndarray:
     vol = np.broadcast_to(np.asarray(vol, float), (n,))
     tree = cKDTree(X) if tree is None else tree
     k = min(n, 4**dim if k is None else k)
-    _, nb = tree.query(X, k=k)
-    nb = np.asarray(nb).reshape(n, k)
-    D = np.abs(X[nb] - X[:, None, :])  # (n, k, dim)
-    in_cone = (D >= D.max(axis=2, keepdims=True)) & (D > 0)
-    h = np.where(in_cone, D, np.inf).min(axis=1)  # (n, dim)
+    h = np.empty((n, dim))
+    for a in range(0, n, chunk):  # bounded work arrays (chunk x k x dim)
+        b = min(n, a + chunk)
+        _, nb = tree.query(X[a:b], k=k)
+        D = np.abs(X[np.asarray(nb).reshape(b - a, k)] - X[a:b, None, :])
+        in_cone = (D >= D.max(axis=2, keepdims=True)) & (D > 0)
+        h[a:b] = np.where(in_cone, D, np.inf).min(axis=1)
     found = np.isfinite(h)
     nf = found.sum(axis=1)
     logh = np.where(found, np.log(np.where(found, h, 1.0)), 0.0)
