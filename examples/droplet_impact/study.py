@@ -129,7 +129,7 @@ def analyse(out: Path, data: dict) -> dict:
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
-    from matplotlib.ticker import MaxNLocator
+    from matplotlib.ticker import MaxNLocator, NullLocator, ScalarFormatter
 
     summary = json.loads((out / "summary.json").read_text())
     D, v, tc = case_scales(data)
@@ -153,17 +153,17 @@ def analyse(out: Path, data: dict) -> dict:
     for _t, m in picked:
         k, y = kind_of(m), np.abs(m.points[:, 1]) < 0.75 * dx
         sl_f.append(y & (k == 0))
-        sl_s.append(y & ((k == 1) | (k == 2)) & (m.points[:, 2] > -5 * dx))
+        sl_s.append(y & ((k == 1) | (k == 2)) & (m.points[:, 2] > -3 * dx))
     Tf = np.concatenate([temp_of(m)[s] for (_t, m), s in zip(picked, sl_f, strict=True)])
     Ts = np.concatenate([temp_of(m)[s] for (_t, m), s in zip(picked, sl_s, strict=True)])
     xmax = max(float(np.abs(m.points[s, 0]).max()) for (_t, m), s in
                zip(picked, sl_f, strict=True)) + 2 * dx
-    zlo = -5 * dx
+    zlo = -3 * dx  # the top substrate layers: heat reaches ~ sqrt(kappa t) = 3 um
     ztop = [float(m.points[s, 2].max()) + dx for (_t, m), s in zip(picked, sl_f, strict=True)]
     width = 9.0
     heights = [width * 0.78 * (zt - zlo) / (2 * xmax) for zt in ztop]
-    fig, axes = plt.subplots(len(picked), 1, figsize=(width, sum(heights) + 0.5 * len(picked)
-                                                      + 0.6),
+    fig, axes = plt.subplots(len(picked), 1, figsize=(width, sum(heights) + 0.3 * len(picked)
+                                                      + 0.5),
                              gridspec_kw={"height_ratios": heights}, sharex=True,
                              squeeze=False, layout="constrained")
     axes = axes[:, 0]
@@ -202,7 +202,8 @@ def analyse(out: Path, data: dict) -> dict:
         dT = np.asarray(sm.point_data["dT"]).ravel()
         vm = np.asarray(sm.point_data["von_mises"]).ravel()
         lim = min(3 * D, 1.3 * spread * D / 2 + 4 * dx)
-        near = top & (np.abs(P[:, 0]) < lim) & (np.abs(P[:, 1]) < lim)
+        # triangulate beyond the shown square so its corners lie inside the nodes' hull
+        near = top & (np.abs(P[:, 0]) < 1.3 * lim) & (np.abs(P[:, 1]) < 1.3 * lim)
         fig, axes = plt.subplots(1, 2, figsize=(11, 4.6), layout="constrained")
         for ax, val, lab, cm in ((axes[0], dT[near] + T0 - 273.15, "T [C]", "inferno"),
                                  (axes[1], vm[near] / 1e6, "von Mises [MPa]", "viridis")):
@@ -212,6 +213,8 @@ def analyse(out: Path, data: dict) -> dict:
                                  cmap=cm, extend="both")
             ax.plot(P[near, 0] * 1e3, P[near, 1] * 1e3, ",", color="w", alpha=0.5)
             fig.colorbar(tc_, ax=ax, label=lab)
+            ax.set_xlim(-lim * 1e3, lim * 1e3)
+            ax.set_ylim(-lim * 1e3, lim * 1e3)
             ax.set_aspect("equal")
             ax.set_xlabel("x [mm]")
             ax.set_ylabel("y [mm]")
@@ -264,8 +267,13 @@ def analyse(out: Path, data: dict) -> dict:
         a1.plot([p[name] / 1e6 for p in last["probes"]], depth, "o", color=f"C{k}", ms=4)
     a1.plot([p["von_mises"] / 1e6 for p in last["probes"]], depth, "o", color="k", ms=4,
             label="probes")
-    a1.set_yscale("symlog", linthresh=20.0)
+    a1.set_yscale("symlog", linthresh=20.0, linscale=1.5)
     a1.set_ylim(float(max(depth.max(), 1.0)) * 1.05, 0.0)
+    ticks = sorted({0.0, 5.0, 10.0, 20.0, 50.0, 100.0, 200.0} | {round(float(x)) for x in
+                                                                 depth[depth > 20.0]})
+    a1.set_yticks([x for x in ticks if x <= depth.max() * 1.05])
+    a1.yaxis.set_major_formatter(ScalarFormatter())
+    a1.yaxis.set_minor_locator(NullLocator())
     a1.set_xlabel("stress [MPa]")
     a1.set_ylabel("depth under the impact point [um] (linear to 20 um, then log)")
     a1.legend(fontsize=8)
