@@ -123,7 +123,9 @@ class SolidBody:
         and B0_g = Q B0_p Q once, so a real particle near the plane sees the full support
         of the mirrored body (its stress divergence is that of the symmetric continuation,
         exact for every state symmetric about the plane, e.g. a uniform one).  Ghosts hold
-        every component (the integrators never move them) and their own forces are unused.
+        every component (the integrators never move them) and their own forces are unused;
+        body-wide sums (:meth:`strain_energy`, :meth:`reaction`) include them, so callers
+        that report those restrict them to the real particles.
         """
         g = np.asarray(ghost, np.int64)
         p = np.asarray(partner, np.int64)
