@@ -57,3 +57,13 @@ def test_console_script_entry_point():
     r = subprocess.run([sys.executable, "-m", "sphfem.cli", "--help"], capture_output=True,
                        text=True, timeout=120)
     assert r.returncode == 0 and "run" in r.stdout
+
+
+def test_validate_warms_up_unless_told_not_to(tmp_path, capsys):
+    """A case's timed runs follow an untimed warm-up (reported in the notes);
+    --no-warmup times them cold."""
+    assert main(["validate", "laplacian", "--quick", "--json", str(tmp_path / "w.json")]) == 0
+    assert "note: untimed warm-up before the timed runs" in capsys.readouterr().out
+    assert any("warm-up" in n for n in json.loads((tmp_path / "w.json").read_text())["notes"])
+    assert main(["validate", "laplacian", "--quick", "--no-warmup"]) == 0
+    assert "warm-up" not in capsys.readouterr().out
