@@ -8,16 +8,23 @@
   physics module;
 * :mod:`sphfem.fluid.scene_section` -- the ``[fluid]`` scene section;
 * :mod:`sphfem.fluid.setup` -- lattices, wall layers and hydrostatic initial states;
+* :mod:`sphfem.fluid.packing` -- initial particle packing (``[fluid.packing]``, declared in
+  :mod:`sphfem.fluid.packing_section`);
 * :mod:`sphfem.fluid.bench` -- the 3D dam-break throughput benchmark.
 
 Importing this package registers the module and its section by name only; the solver
 classes are imported (and numba loaded) on first attribute access.
 """
 
+from dataclasses import replace as _replace
+
+from sphfem.fluid.packing_section import PACKING
 from sphfem.fluid.scene_section import FLUID
 from sphfem.schema import register_module
 
-register_module("fluid", FLUID, target="sphfem.fluid.wcsph:FluidModule")
+# [fluid.packing] is declared next to the packing (sphfem.fluid.packing_section)
+register_module("fluid", _replace(FLUID, subsections=FLUID.subsections + (PACKING,)),
+                target="sphfem.fluid.wcsph:FluidModule")
 
 __all__ = ["FluidModule", "FluidParams", "FluidSolver"]
 

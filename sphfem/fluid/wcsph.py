@@ -52,7 +52,7 @@ from sphfem.neighbors import (
     cell_sort_permutation,
     min_image,
 )
-from sphfem.particles import FLUID, ParticleSet
+from sphfem.particles import FLUID, WALL, ParticleSet
 from sphfem.physics import PhysicsModule, register_physics
 
 logger = logging.getLogger(__name__)
@@ -607,6 +607,32 @@ class FluidSolver:
                 next_cb += every
         return {"steps": self.step_count, "controlling_limit_counts": counts}
 
+    def relax(self, duration: float, damping: float) -> dict:
+        """Dynamic relaxation to the discrete equilibrium: run the full equations for
+        ``duration`` [s] with an added velocity damping du/dt = ... - ``damping`` u
+        (applied implicitly after every step, u <- u / (1 + damping dt)), then zero the
+        velocities and restart the clock at the time it had (body-force ramp included
+        from t = 0 of the relaxation; the densities and positions are kept).
+
+        Returns the relaxation's step count and the largest fluid speed at its end [m/s].
+        """
+        t_start, steps0 = self.t, self.step_count
+        fl = self.p.kind == FLUID
+        while self.t < t_start + duration * (1 - 1e-12):
+            dt, _ = self.stable_dt()
+            dt = min(dt, t_start + duration - self.t)
+            self.step(dt)
+            self.check()
+            fl = self.p.kind == FLUID  # the solver may cell-sort
+            self.p.v[fl] /= 1.0 + damping * dt
+        vmax = float(np.sqrt((self.p.v[fl] ** 2).sum(axis=1)).max()) if fl.any() else 0.0
+        self.p.v[fl] = 0.0
+        out = {"steps": self.step_count - steps0, "final_max_speed": vmax}
+        self.t, self.step_count = t_start, steps0
+        with _threads(self.nthreads):
+            self.evaluate()
+        return out
+
     def total_fluid_force_on_walls(self) -> np.ndarray:
         """Sum of ``f_fluid`` over wall particles [N] (the fluid's force on the walls)."""
         return self.p.f_fluid.sum(axis=0)
@@ -694,6 +720,8 @@ class FluidModule(PhysicsModule):
         cfg = getattr(scene, "fluid", None)
         self.params = cfg if isinstance(cfg, FluidParams) else params_from_scene(scene)
         self.solver = None
+        #: :class:`~sphfem.fluid.packing.PackingReport` of ``[fluid.packing]`` (None: off)
+        self.packing_report = None
 
     def fields(self):
         dim = self.scene.dim
@@ -709,10 +737,35 @@ class FluidModule(PhysicsModule):
             for name in fluid_materials(sim.scene):
                 sel = fl & (ps.material == names.index(name))
                 ps.mu[sel] = (sim.scene.materials[name].mu or 0.0) if visc else 0.0
+        if self.packing_report is None and sim.step_count == 0 and sim.t == 0.0:
+            self._pack(sim)
         self.solver = FluidSolver(ps, sim.R, sim.lo, sim.hi, sim.period, self.params,
                                   kernel=sim.scene.sph.kernel, sim=sim)
         self.solver.t = sim.t  # a resumed run keeps its body-force ramp
         self.solver.step_count = sim.step_count
+
+    def _pack(self, sim) -> None:
+        """``[fluid.packing]``: relax the fluid particles against the walls (once, before
+        the first step; :func:`sphfem.fluid.packing.pack`), then rebuild the list."""
+        cfg = getattr(sim.scene, "fluid", None)
+        pk = getattr(cfg, "packing", None) if not isinstance(cfg, FluidParams) else None
+        if pk is None or pk.iterations <= 0:
+            return
+        from sphfem.fluid.packing import pack
+
+        ps = sim.particles
+        fl = ps.kind == FLUID
+        wall = ps.kind == WALL
+        dx = sim.scene.sph.dx
+        x, rep = pack(ps.x[fl], ps.x[wall], dx, sim.R, sim.lo, sim.hi, sim.period,
+                      vol_fixed=ps.vol[wall], iterations=pk.iterations, tol=pk.tolerance,
+                      jitter=pk.jitter, seed=pk.seed, kernel=sim.scene.sph.kernel)
+        ps.x[fl] = x
+        self.packing_report = rep
+        logger.info("fluid packing: %d iterations, residual %.3g (tolerance %.3g), largest "
+                    "shift %.3g dx", rep.iterations, rep.residual, pk.tolerance,
+                    rep.max_shift_over_dx)
+        sim.update_neighbors()
 
     def dt_limits(self, sim) -> dict[str, float]:
         return self.solver.dt_limits()
@@ -725,7 +778,10 @@ class FluidModule(PhysicsModule):
         self.solver.reorder(perm)
 
     def diagnostics(self, sim) -> dict:
-        return self.solver.diagnostics()
+        out = self.solver.diagnostics()
+        if self.packing_report is not None:
+            out["packing"] = self.packing_report.to_dict()
+        return out
 
 
 register_physics("fluid", "sphfem.fluid.wcsph:FluidModule")
