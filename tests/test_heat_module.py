@@ -185,14 +185,19 @@ def _approach_scene(skin: float, time_integration="explicit", laplacian="cleary"
     }
 
 
-def _run_approach(tmp_path, tag, **kw):
+def _run_scene(tmp_path, tag, scene: dict):
+    """Run a scene dict into ``tmp_path / tag``: (simulation, summary)."""
     from sphfem.scene import parse_scene
     from sphfem.simulation import Simulation
 
-    sim = Simulation(parse_scene(_approach_scene(**kw)))
+    sim = Simulation(parse_scene(scene))
     out = tmp_path / tag
     out.mkdir()
-    summary = sim.run(out, progress=False)
+    return sim, sim.run(out, progress=False)
+
+
+def _run_approach(tmp_path, tag, **kw):
+    sim, summary = _run_scene(tmp_path, tag, _approach_scene(**kw))
     ps = sim.particles
     b = ps.material == 1
     heat_b = float(np.sum(ps.m[b] * ps.c_heat[b] * (ps.T[b] - 300.0)))
@@ -287,13 +292,8 @@ def _strip_scene(dim: int, periodic: bool, laplacian: str, n: int = 40, width: i
 def _run_strip(tmp_path, tag, **kw):
     """Real particles sorted by position, their T, and the heat diagnostics."""
     from sphfem.particles import GHOST
-    from sphfem.scene import parse_scene
-    from sphfem.simulation import Simulation
 
-    sim = Simulation(parse_scene(_strip_scene(**kw)))
-    out = tmp_path / tag
-    out.mkdir()
-    s = sim.run(out, progress=False)
+    sim, s = _run_scene(tmp_path, tag, _strip_scene(**kw))
     ps = sim.particles
     real = ps.kind != GHOST
     order = np.lexsort(ps.x[real].T[::-1])
@@ -379,8 +379,6 @@ def test_ghosts_of_a_moving_solid_move_with_it(translate_module, tmp_path, lapla
     where they were placed while the strip moved away from them: 0.18 K off (Cleary),
     0.14 K (corrected)."""
     from sphfem.particles import GHOST
-    from sphfem.scene import parse_scene
-    from sphfem.simulation import Simulation
 
     T = {}
     for tag, modules in (("static", ["heat"]), ("moving", ["heat", "translate"])):
@@ -389,9 +387,7 @@ def test_ghosts_of_a_moving_solid_move_with_it(translate_module, tmp_path, lapla
         sc["physics"]["modules"] = modules
         sc["time"] = {"t_end": 0.03, "dt": 1e-3}
         sc["heat"]["time_integration"] = "implicit"
-        sim = Simulation(parse_scene(sc))
-        (tmp_path / tag).mkdir()
-        s = sim.run(tmp_path / tag, progress=False)
+        sim, s = _run_scene(tmp_path, tag, sc)
         ps = sim.particles
         real = ps.kind != GHOST
         T[tag] = ps.T[real][np.argsort(ps.id[real])]
