@@ -162,3 +162,37 @@ def test_dam_break_example_scene_parses():
     fl = [b for b in sc.blocks if b.kind == "fluid"]
     (lo, hi), = [(b.lo, b.hi) for b in fl]
     assert hi[1] - lo[1] == pytest.approx(2 * (hi[0] - lo[0]))  # H x 2H column
+
+
+def test_fluid_packing_from_a_scene():
+    """[fluid.packing]: the fluid block is packed once before the first step (reported in
+    the diagnostics); below the free boundaries the packing force over fluid + walls is
+    below the tolerance, the column left its lattice, nothing entered a wall."""
+    from sphfem import kernels
+
+    text = SCENE.format(modules='["fluid"]', steps=1, skin=0.1)
+    text += "[fluid.packing]\niterations = 20000\ntolerance = 1e-6\n"
+    sc = parse_scene_toml(text, "pack.toml")
+    assert sc.fluid.packing.iterations == 20000 and sc.fluid.packing.jitter == 0.1
+    lattice_sim = Simulation(_scene(modules=("fluid",), steps=1))
+    sim = Simulation(sc)
+    d = sim.modules[0].diagnostics(sim)["packing"]
+    assert d["converged"] and d["residual"] <= 1e-6 and d["max_shift_over_dx"] > 0.1
+    ps = sim.particles
+    fl = ps.kind == FLUID
+    x, xw, dx, R = ps.x[fl], ps.x[ps.kind == WALL], sc.sph.dx, sim.R
+    assert fl.sum() == (lattice_sim.particles.kind == FLUID).sum()
+    allx = np.concatenate([x, xw])
+    d_ = x[:, None, :] - allx[None, :, :]
+    r = np.sqrt((d_**2).sum(-1))
+    q = np.minimum(r / R, 1.0)
+    sig = kernels.kernel_sigma(kernels.WENDLAND_C2, 2, R)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        f = np.where((r > 0) & (r < R), sig * (-20 * q * (1 - q) ** 3) / R / r, 0.0) * dx * dx
+    g = (f[..., None] * d_).sum(1)
+    inner = (x[:, 0] < 0.05 - R - dx) & (x[:, 1] < 0.1 - R - dx)  # free: right and top
+    assert inner.sum() > 20
+    assert np.sqrt((g[inner] ** 2).sum(1)).max() * R < 1e-5
+    assert (x[:, 0] > 0).all() and (x[:, 1] > 0).all()
+    with pytest.raises(SceneError, match=r"fluid\.packing\.jitter"):
+        parse_scene_toml(text.replace("tolerance = 1e-6", "jitter = 0.9"), "pack.toml")

@@ -607,32 +607,6 @@ class FluidSolver:
                 next_cb += every
         return {"steps": self.step_count, "controlling_limit_counts": counts}
 
-    def relax(self, duration: float, damping: float) -> dict:
-        """Dynamic relaxation to the discrete equilibrium: run the full equations for
-        ``duration`` [s] with an added velocity damping du/dt = ... - ``damping`` u
-        (applied implicitly after every step, u <- u / (1 + damping dt)), then zero the
-        velocities and restart the clock at the time it had (body-force ramp included
-        from t = 0 of the relaxation; the densities and positions are kept).
-
-        Returns the relaxation's step count and the largest fluid speed at its end [m/s].
-        """
-        t_start, steps0 = self.t, self.step_count
-        fl = self.p.kind == FLUID
-        while self.t < t_start + duration * (1 - 1e-12):
-            dt, _ = self.stable_dt()
-            dt = min(dt, t_start + duration - self.t)
-            self.step(dt)
-            self.check()
-            fl = self.p.kind == FLUID  # the solver may cell-sort
-            self.p.v[fl] /= 1.0 + damping * dt
-        vmax = float(np.sqrt((self.p.v[fl] ** 2).sum(axis=1)).max()) if fl.any() else 0.0
-        self.p.v[fl] = 0.0
-        out = {"steps": self.step_count - steps0, "final_max_speed": vmax}
-        self.t, self.step_count = t_start, steps0
-        with _threads(self.nthreads):
-            self.evaluate()
-        return out
-
     def total_fluid_force_on_walls(self) -> np.ndarray:
         """Sum of ``f_fluid`` over wall particles [N] (the fluid's force on the walls)."""
         return self.p.f_fluid.sum(axis=0)
