@@ -18,7 +18,7 @@ support radius R = 3 dx, Adami walls of 3 particle layers, cell-centred lattices
   front Z = x/a against T = t sqrt(2 g / a), compared with the experiments of Koshizuka & Oka
   (1996) and Martin & Moyce (1952, n^2 = 2, a = 2.25 in), as digitised in PySPH's
   ``pysph/examples/db_exp_data.py``; bounded above by the shallow-water (Ritter) front
-  Z = 1 + 2 T.
+  Z = 1 + 2 T; the front curve must converge (successive differences shrinking).
 """
 
 from __future__ import annotations
@@ -300,14 +300,26 @@ def run_dambreak(n_width: int, T_end: float = 3.2, a: float = 0.146, g: float = 
     return np.array(T), np.array(Z), s
 
 
+def cauchy_ratio(curves, T_eval) -> float:
+    """Self-convergence of front curves {n: (T, Z)} of three resolutions n1 < n2 < n3:
+    ||Z_n3 - Z_n2|| / ||Z_n2 - Z_n1|| (L2 over ``T_eval``); < 1 when the difference
+    between successive resolutions shrinks (observed order log2(1/ratio) for doubling)."""
+    n1, n2, n3 = sorted(curves)[-3:]
+    z = {n: np.interp(T_eval, *curves[n]) for n in (n1, n2, n3)}
+    d12 = float(np.sqrt(np.mean((z[n2] - z[n1]) ** 2)))
+    d23 = float(np.sqrt(np.mean((z[n3] - z[n2]) ** 2)))
+    return d23 / d12 if d12 > 0 else math.inf
+
+
 @register("dambreak")
 def dambreak_case(quick: bool = False) -> CaseResult:
-    """2D dam break (column a x 2a): surge front vs Koshizuka & Oka / Martin & Moyce."""
+    """2D dam break (column a x 2a): surge front vs Koshizuka & Oka / Martin & Moyce, and
+    self-convergence of the front curve."""
     run_dambreak(5, 0.05)  # compile
     runs = []
     ritter_ok = 0.0
     curves = {}
-    for n in ((10, 20) if quick else (20, 40, 80)):
+    for n in ((10, 20, 40) if quick else (20, 40, 80)):
         with Timer() as tm:
             T, Z, s = run_dambreak(n)
         zi = np.interp(KOSHIZUKA_OKA[:, 0], T, Z)
@@ -320,17 +332,33 @@ def dambreak_case(quick: bool = False) -> CaseResult:
                         {"steps": s.step_count, "err_vs_martin_moyce": em,
                          "Z_at_T3": float(np.interp(3.0, T, Z)),
                          "curve_T": T[::5].round(3).tolist(), "curve_Z": Z[::5].round(4).tolist()}))
+    T_eval = np.linspace(0.25, 3.0, 12)
     criteria = {
         "ritter_bound": Criterion("max of Z - (1 + 2T) (shallow-water front, must be <= 0)",
                                   ritter_ok, 0.0),
+        "self_convergence": Criterion(
+            "||Z_finest - Z_middle|| / ||Z_middle - Z_coarsest|| over T in [0.25, 3] "
+            "(< 1: the front curve converges; catches an error growing with resolution)",
+            cauchy_ratio(curves, T_eval), 1.0),
         "koshizuka_oka": Criterion("relative L2 distance to Koshizuka & Oka (finest)",
                                    runs[-1].error_l2, 0.15),
     }
     notes = ["a = 0.146 m, c0 = 10 sqrt(2 g a), mu = 1e-3 Pa s, delta = 0.1, alpha = 0.02; "
-             "Z = (max x of "
-             "fluid + dx/2)/a, T = t sqrt(2g/a); 'err L2' is the relative distance to "
-             "Koshizuka & Oka (1996) at their sample times; experimental fronts lag the "
-             "inviscid computation at early times (gate removal, bottom friction).",
+             "Z = (max x of fluid + dx/2)/a, T = t sqrt(2g/a); 'err L2' is the relative "
+             "distance to Koshizuka & Oka (1996) at their sample times.",
+             "Why the distance to the experiments grows with refinement (7.6, 10.7, 12.1 % at "
+             "a/20, a/40, a/80): the artificial viscosity alpha h c0 (h = 1.5 dx) slows the "
+             "coarse fronts; the front depends on alpha h, not on dx itself: Z(T=3) = 3.915 at "
+             "a/20 with alpha = 0.005 against 3.916 at a/80 with alpha = 0.02 (same alpha h), "
+             "3.693 at a/20 with alpha = 0.02.  The converging SPH front approaches the "
+             "nearly inviscid flow, whose front speed dZ/dT over T in [2, 3] (1.37 at a/80) "
+             "exceeds the experiments' (Koshizuka & Oka 0.94, Martin & Moyce 1.14 over "
+             "T = 1.2-2.5): gate removal and bottom friction slow the real front; no time "
+             "shift reconciles the slopes (best-fit shifts 0.16, 0.22, 0.26 leave 2.9, 3.7, "
+             "4.0 %).  The front definition is not the cause: the furthest particle of the "
+             "bottom layer (y < 2 dx) gives the same Z.  Hence the accuracy criterion is the "
+             "self-convergence of the computed front, and the experiments bound the model "
+             "error (<= 15 %).",
              "the curve (T, Z) of every run is in 'extra' of --json."]
     return CaseResult("dambreak", runs, criteria, notes, resolution_label="dx/a",
                       extra_columns={"steps": "steps", "err_vs_martin_moyce": "vs M&M",
