@@ -2,16 +2,19 @@
 
 Modules, one job each:
 
-* :mod:`coupling.sensors` -- the sensor particles (the SPH solid region's surface layers):
-  the force the fluid exerts on them and the region's temperatures;
+* :mod:`coupling.sensors` -- the SPH solid region (:func:`~coupling.sensors.coupled_region`)
+  and its sensor particles (the surface layers): the force the fluid exerts on them and the
+  region's temperatures;
 * :mod:`coupling.transfer` -- conservative point-force load f = P^T F on the substrate's
   surface and the particle -> node temperature map;
-* :mod:`coupling.backends` -- the substrate-backend protocol and the FEM backend;
+* :mod:`coupling.backends` -- the substrate-backend protocol, both backends (FEM and TL-SPH,
+  wrapping ``sphfem``'s substrates) and their one result type;
 * :mod:`coupling.driver` -- the one-way staggered driver and the ``coupling`` physics
   module;
 * :mod:`coupling.scene_section` -- the ``[coupling]`` scene section.
 
-Importing this package registers the module and its section only (no numba / scipy).
+``coupling`` depends on ``sphfem``, never the reverse.  Importing this package registers the
+module and its section only (no numba / scipy).
 """
 
 from coupling.scene_section import COUPLING

@@ -46,6 +46,14 @@ def _points(v, ctx, key):
     return tuple(tuple(float(x) for x in p) for p in v)
 
 
+def region_block_names(cfg, blocks) -> list[str]:
+    """Names of the blocks forming the SPH solid region of the ``[coupling]`` section
+    ``cfg``: its ``blocks`` list, by default every wall or solid block of its material."""
+    if cfg.blocks is not None:
+        return list(cfg.blocks)
+    return [b.name for b in blocks if b.material == cfg.material and b.kind in ("wall", "solid")]
+
+
 def _check(rec, ctx, path):
     core = ctx.core
     mats = core.get("materials", {})
@@ -58,9 +66,7 @@ def _check(rec, ctx, path):
             ctx.error(f"materials.{rec.material}.{k}",
                       f"missing: the coupled substrate needs {k} (material {rec.material!r})")
     blocks = {b.name: b for b in core.get("blocks", ())}
-    names = rec.blocks if rec.blocks is not None else [
-        b.name for b in blocks.values() if b.material == rec.material
-        and b.kind in ("wall", "solid")]
+    names = region_block_names(rec, blocks.values())
     if not names:
         ctx.error(f"{path}.blocks", f"no wall or solid block of material {rec.material!r}: "
                                     "name the SPH solid region's blocks")

@@ -121,3 +121,32 @@ class SensorSet:
             x_region=ps.x[ir].copy(), T_region=None if T is None else T[ir].copy(),
             vol_region=ps.vol[ir].copy(), ids_region=ps.id[ir].copy(),
             unassigned_force=np.asarray(unassigned, float))
+
+
+@dataclass
+class CoupledRegion:
+    """The SPH solid region of a ``[coupling]`` section: its blocks, their shapes and
+    bounding box, and the substrate's stress-free temperature."""
+
+    names: list[str]  #: block names (``coupling.blocks``, default: see below)
+    blocks: list  #: the scene's block records, in that order
+    shapes: list  #: their :class:`sphfem.geometry.Shape`
+    lo: np.ndarray  #: (dim,) lower corner of the shapes' bounding box [m]
+    hi: np.ndarray  #: (dim,) upper corner [m]
+    T0: float  #: ``coupling.T0``, default the first block's initial temperature [K]
+
+
+def coupled_region(scene, cfg) -> CoupledRegion:
+    """The region of ``cfg`` (``scene.coupling``): the blocks it names, by default every
+    wall or solid block of its material (:func:`coupling.scene_section.region_block_names`);
+    both substrate backends and the driver's sensors take their box and T0 from here."""
+    from coupling.scene_section import region_block_names
+    from sphfem.geometry import Shape
+
+    names = region_block_names(cfg, scene.blocks)
+    blocks = [scene.blocks[scene.block_index(n)] for n in names]
+    shapes = [Shape.from_block(b, scene.dim) for b in blocks]
+    lo = np.min([s.bounds()[0] for s in shapes], axis=0).astype(float)
+    hi = np.max([s.bounds()[1] for s in shapes], axis=0).astype(float)
+    T0 = float(cfg.T0 if cfg.T0 is not None else blocks[0].temperature)
+    return CoupledRegion(names, blocks, shapes, lo, hi, T0)

@@ -58,6 +58,9 @@ import logging
 
 import numpy as np
 import scipy.sparse as sp
+from numba import njit
+
+from sphfem.kernels import kernel_code, kernel_f
 
 logger = logging.getLogger(__name__)
 
@@ -222,9 +225,7 @@ class TemperatureMap:
         rows = np.concatenate([rows, np.nonzero(on)[0]])
         cols = np.concatenate([cols, j0[on]])
         r = np.concatenate([r, np.zeros(int(on.sum()))])
-        from sphfem.kernels import kernel_code
-
-        w = _kernel_shape(r / R, kernel_code(kernel)) * vol[cols]
+        w = _kernel_shapes(r / R, kernel_code(kernel)) * vol[cols]
         wsum = np.bincount(rows, weights=w, minlength=m)
         shep = w / wsum[rows]
         if method == "shepard":
@@ -311,15 +312,11 @@ def _in_cells(Xt, Xs, h, tree, rtol: float = 1e-6) -> np.ndarray:
     return covered
 
 
-def _kernel_shape(q: np.ndarray, kind: int) -> np.ndarray:
-    """Un-normalised kernel shape f(q) (see :mod:`sphfem.kernels`), vectorised."""
-    q = np.asarray(q, float)
-    out = np.zeros_like(q)
-    inside = q < 1.0
-    qi = q[inside]
-    if kind == 0:  # Wendland C2
-        out[inside] = (1 - qi) ** 4 * (1 + 4 * qi)
-    else:  # cubic spline, s = 2q
-        s = 2 * qi
-        out[inside] = np.where(s < 1, 1 - 1.5 * s**2 + 0.75 * s**3, 0.25 * (2 - s) ** 3)
+@njit(cache=True)
+def _kernel_shapes(q: np.ndarray, kind: int) -> np.ndarray:
+    """The un-normalised kernel shape f(q) of :func:`sphfem.kernels.kernel_f` at every q
+    (the normalisation cancels in the Shepard and MLS weights)."""
+    out = np.empty(q.size)
+    for i in range(q.size):
+        out[i] = kernel_f(q[i], kind)
     return out

@@ -204,7 +204,7 @@ def test_force_handed_over_equals_force_the_fluid_felt():
         ps.f_fluid[wl]).sum()
     assert rec["unassigned_force"] == [0.0, 0.0] and rec["force_residual_rel"] < 1e-14
     # and the FEM reaction carries the handed-over load
-    reac = d.last.fem.reaction("bottom")
+    reac = d.last.result.reaction("bottom")
     assert np.allclose(reac, -floor_force, rtol=1e-8, atol=1e-10 * np.abs(floor_force).max())
 
 

@@ -15,11 +15,9 @@ Modules, one job each:
   iteration (sec. 2.5.5), dynamic relaxation
 * :mod:`~sphfem.solid.thermal`      -- heat conduction through :mod:`sphfem.heat` (ghosts)
 * :mod:`~sphfem.solid.lattice`      -- particle lattices
-* :mod:`~sphfem.solid.backend`      -- :class:`TLSPHSubstrate`, the FEMSubstrate-like
-  quasi-static substrate backend
-
-* :mod:`~sphfem.solid.coupled`      -- :class:`TLSPHBackend` for the coupling driver
-  (``[coupling] backend = "tlsph"``)
+* :mod:`~sphfem.solid.backend`      -- :class:`TLSPHSubstrate`, the quasi-static substrate
+  with FEMSubstrate's ``solve`` (the coupling's TL-SPH backend,
+  ``coupling.backends.TLSPHBackend``, wraps it; this package never imports ``coupling``)
 * :mod:`~sphfem.solid.module`       -- :class:`TLSPHModule`, the ``tlsph`` physics module
   of the scene driver; :mod:`~sphfem.solid.scene_section` its ``[tlsph]`` section
 
@@ -34,10 +32,6 @@ register_module("tlsph", TLSPH, target="sphfem.solid.module:TLSPHModule")
 
 
 def __getattr__(name):
-    if name == "TLSPHBackend":
-        from sphfem.solid.coupled import TLSPHBackend
-
-        return TLSPHBackend
     if name == "TLSPHSubstrate":
         from sphfem.solid.backend import TLSPHSubstrate
 

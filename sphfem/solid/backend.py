@@ -40,6 +40,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from sphfem import kernels
+from sphfem.loads import at_points, temperature_change
 from sphfem.solid.body import SolidBody, _components
 from sphfem.solid.constitutive import lame
 from sphfem.solid.integrate import relax
@@ -229,14 +230,11 @@ class TLSPHSubstrate:
 
     # -- loads ---------------------------------------------------------------------------
     def _dT_at(self, spec, X) -> np.ndarray:
-        n = X.shape[0]
-        if spec is None:
-            return np.zeros(n)
-        if callable(spec):
-            return np.broadcast_to(np.asarray(spec(X.T), float), (n,)).copy()
-        a = np.asarray(spec, float)
-        if a.ndim == 0:
-            return np.full(n, float(a))
+        """Temperature change at the points X (n, dim): scalar, callable or one value per
+        body particle (:mod:`sphfem.loads`)."""
+        a = None if spec is None or callable(spec) else np.asarray(spec, float)
+        if a is None or a.ndim == 0:
+            return at_points(spec, X.T).copy()
         if a.shape == (self.n_particles,):
             return a.copy()
         raise ValueError(f"dT: expected a scalar, a callable or {self.n_particles} values "
@@ -259,13 +257,10 @@ class TLSPHSubstrate:
             if g not in self.face_layer:
                 raise ValueError(f"unknown face {g!r}; expected one of {sorted(self.faces)}")
             idx = self.face_layer[g]
-            tv = (np.asarray(t(Xall[idx].T), float).T if callable(t)
-                  else np.broadcast_to(np.asarray(t, float), (idx.size, self.dim)))
-            b.f_ext[idx] += tv * area
+            b.f_ext[idx] += at_points(t, Xall[idx].T, self.dim) * area
         if body_force is not None:
-            bv = (np.asarray(body_force(self.X.T), float).T if callable(body_force)
-                  else np.broadcast_to(np.asarray(body_force, float), self.X.shape))
-            b.f_ext[self.inside] += bv * self.vol[:, None]
+            b.f_ext[self.inside] += at_points(body_force, self.X.T, self.dim) * \
+                self.vol[:, None]
         if point_forces is not None:
             pts, F = (np.atleast_2d(np.asarray(a, float)) for a in point_forces)
             cand = self.face_layer[snap] if snap else self.inside
@@ -279,12 +274,7 @@ class TLSPHSubstrate:
         previous state).  ``body_force``: constant (dim,) or callable of the reference
         coordinates (dim, n) [N/m^dim], applied as b V on every body particle."""
         t0 = time.perf_counter()
-        if T_nodal is not None:
-            if dT_nodal is not None:
-                raise ValueError("give dT_nodal or T_nodal, not both")
-            T = T_nodal
-            dT_nodal = (lambda x: np.asarray(T(x)) - self.T0) if callable(T) else \
-                np.asarray(T, float) - self.T0
+        dT_nodal = temperature_change(dT_nodal, T_nodal, self.T0)
         self._set_loads(dT_nodal, tractions, point_forces, snap, body_force)
         info = relax(self.body, tol=self.tol, max_steps=self.max_steps)
         self.body.internal_forces()
