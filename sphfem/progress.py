@@ -85,6 +85,7 @@ class StageLog:
         self.stages: list[dict] = []
         self.compiles = 0
         self.compile_s = 0.0
+        self.compiled: list[str] = []  # module.qualname of each cache-missing compilation
         self._depth = 0
         self._t0 = 0.0
 
@@ -101,7 +102,8 @@ class StageLog:
     def to_dict(self) -> dict:
         return {"stages": [dict(s) for s in self.stages],
                 "numba_compilations": self.compiles,
-                "numba_compile_s": self.compile_s}
+                "numba_compile_s": self.compile_s,
+                "numba_compiled": list(self.compiled)}
 
 
 @contextmanager
@@ -141,6 +143,9 @@ def _install_compile_listener() -> None:
                     log._t0 = time.perf_counter()
                 log._depth += 1
                 log.compiles += 1
+                f = getattr(ev.data.get("dispatcher"), "py_func", None)
+                log.compiled.append(f"{getattr(f, '__module__', '?')}."
+                                    f"{getattr(f, '__qualname__', '?')}")
 
         def on_end(self, ev):
             log = _state["log"]

@@ -551,7 +551,10 @@ class FEMSubstrate:
     def _locate(self, X: np.ndarray):
         """Element and reference coordinates of points X (dim, n)."""
         try:
-            cells = self.mesh.element_finder(mapping=self.basis.mapping)(*X)
+            if isinstance(self.mesh, (MeshTet1, MeshTri1)):
+                cells = _find_simplices(self.mesh, self.basis.mapping, X)
+            else:
+                cells = self.mesh.element_finder(mapping=self.basis.mapping)(*X)
         except ValueError:
             lo, hi = self.mesh.p.min(axis=1), self.mesh.p.max(axis=1)
             raise ValueError(f"probe: some of the {X.shape[1]} points are outside the mesh "
@@ -642,6 +645,64 @@ class FEMSubstrate:
                 x, _ = cg(self._mass, b, x0=x0, rtol=1e-12, atol=0.0, M=Minv, maxiter=500)
                 out[:, i, j] = out[:, j, i] = x
         return out
+
+
+#: entries (points x candidate elements) per block of :func:`_find_simplices`
+_FIND_BLOCK = 1 << 21
+
+
+def _find_simplices(mesh, mapping, X: np.ndarray) -> np.ndarray:
+    """The element holding each point of X (dim, n) on a simplex mesh: scikit-fem's
+    ``element_finder`` rule in blocks of candidate elements, the same elements in bounded
+    memory.
+
+    scikit-fem's finder (``MeshTet1`` / ``MeshTri1``) takes the 10 (3D; 2D: 5) elements
+    with the nearest centroids of every point, the union ``ix`` of them all in order of
+    first appearance, and maps *every* point into *every* element of ``ix`` at once: an
+    array of 3 x |ix| x n reference coordinates (the 19,200 sensor points of the droplet
+    job against ~6,000 candidates: 2.8 GB, twice over with the temporaries).  Each point
+    gets the first element of ``ix`` that contains it (reference coordinates >= -eps,
+    barycentric sum <= 1 + dim eps); when some point has none, all points are searched
+    again over all elements in index order.  Here the candidates are visited in the same
+    order in blocks of about ``_FIND_BLOCK`` / n elements and a point keeps its first hit,
+    with at most ``_FIND_BLOCK`` entries at a time.  The element is scikit-fem's, except
+    where a point lies on a face shared by two elements to within round-off: numpy's
+    einsum rounds the reference coordinates differently for different array shapes (an
+    ulp), so which of the two passes the -eps test can differ (24 of the 5,001 mesh
+    vertices of the droplet job's mesh; none of its sensor and probe points).  Either
+    element holds the point; interpolated values then differ by round-off.
+    """
+    from scipy.spatial import cKDTree
+
+    dim, n = X.shape
+    nelems = mesh.t.shape[1]
+    if not hasattr(mesh, "_cached_tree"):  # the tree scikit-fem's finder caches too
+        mesh._cached_tree = cKDTree(np.mean(mesh.p[:, mesh.t], axis=1).T)
+    ix = mesh._cached_tree.query(X.T, min(10 if dim == 3 else 5, nelems))[1].flatten()
+    _, first = np.unique(ix, return_index=True)
+    ix = ix[np.sort(first)]
+    eps = np.finfo(np.float64).eps
+    found = np.full(n, -1, dtype=np.int64)
+    for cand in (ix, None):
+        if cand is None:
+            cand = np.arange(nelems, dtype=np.int64)
+            found[:] = -1  # scikit-fem's second pass searches again for every point
+        block = max(1, _FIND_BLOCK // max(n, 1))
+        for b0 in range(0, len(cand), block):
+            todo = np.flatnonzero(found < 0)
+            if todo.size == 0:
+                break
+            el = cand[b0:b0 + block]
+            R = mapping.invF(X[:, None, todo], el)  # (dim, block, len(todo))
+            rest = 1 - R[0] - R[1]  # scikit-fem's expression, the same rounding
+            if dim == 3:
+                rest = rest - R[2]
+            inside = (R >= -eps).all(axis=0) & (rest >= -dim * eps)
+            hit = inside.any(axis=0)
+            found[todo[hit]] = el[inside[:, hit].argmax(axis=0)]
+        if np.all(found >= 0):
+            return found
+    raise ValueError("Point is outside of the mesh.")
 
 
 def _closest_on_facet(x: np.ndarray, V: np.ndarray) -> np.ndarray:
