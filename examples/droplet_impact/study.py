@@ -259,8 +259,9 @@ def analyse(out: Path, data: dict) -> dict:
                 ax.axhline(f, color="0.8", lw=0.5, zorder=0)
         a2.plot(dTl + T0 - 273.15, zz * 1e6, "-", color="C3", label="nodal T (mapped)")
         res = (f"FEM P1 tets; grey lines: element faces on this line (first at "
-               f"{h_top:.1f} um); SPH dx = {dx * 1e6:.3g} um.\nLines: L2-recovered nodal "
-               f"stress; markers: probe values (constant in each element). Variation within "
+               f"{h_top:.1f} um); SPH dx = {dx * 1e6:.3g} um.  Lines: L2-recovered nodal "
+               f"stress.\nMarkers: probes (the P1 strain, hence von Mises, is constant in "
+               f"each element; only the thermal part follows the nodal T). Variation within "
                f"one element is not resolved.")
         fig.suptitle(res, fontsize=8.5)
     for k, (name, _i, _j) in enumerate(comps):
