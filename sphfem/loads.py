@@ -10,8 +10,9 @@ the loads of a step in one vocabulary:
 
 A callable receives the coordinates as scikit-fem does, ``x`` of shape (dim, n), and returns
 (n,) values for a scalar or (dim, n) for a vector (a constant result is broadcast).
-:func:`at_points` evaluates the constant / callable forms; arrays of per-node values are
-the substrate's own business (they need its node set or interpolation).
+:func:`at_points` evaluates the constant / callable forms; :func:`scalar_at` a temperature
+change in any of its forms, handing arrays of per-node values to the substrate (they need its
+node set or its interpolation).
 """
 
 from __future__ import annotations
@@ -46,3 +47,12 @@ def at_points(spec, X: np.ndarray, ncomp: int | None = None) -> np.ndarray:
         v = np.asarray(spec(X), float)
         return np.broadcast_to(v if ncomp is None else v.T, shape)
     return np.broadcast_to(np.asarray(spec, float), shape)
+
+
+def scalar_at(spec, X: np.ndarray, nodal) -> np.ndarray:
+    """A scalar field (a temperature change) at the points ``X`` (dim, n), as a new array:
+    None (zero), a constant or a callable of the coordinates through :func:`at_points`; an
+    array of per-node values through the substrate's ``nodal(values) -> (n,)``."""
+    if spec is None or callable(spec) or np.ndim(spec) == 0:
+        return at_points(spec, X).copy()
+    return nodal(np.asarray(spec, float))

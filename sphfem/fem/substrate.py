@@ -50,6 +50,7 @@ from skfem import (
 )
 
 from sphfem.fem import forms
+from sphfem.loads import scalar_at, temperature_change
 from sphfem.progress import stage
 
 logger = logging.getLogger(__name__)
@@ -448,20 +449,17 @@ class FEMSubstrate:
                          f"{self.element} dofs); got shape {a.shape}")
 
     def _dT_at(self, spec, X: np.ndarray) -> np.ndarray:
-        """Temperature change at points X (dim, n)."""
-        n = X.shape[1]
-        if spec is None:
-            return np.zeros(n)
-        if callable(spec):
-            return np.broadcast_to(np.asarray(spec(X), float), (n,)).copy()
-        a = np.asarray(spec, float)
-        if a.ndim == 0:
-            return np.full(n, float(a))
+        """Temperature change at points X (dim, n) (:func:`sphfem.loads.scalar_at`); vertex
+        or scalar-dof arrays are interpolated."""
+        return scalar_at(spec, X, lambda a: self._interpolate_scalar(a, X))
+
+    def _interpolate_scalar(self, a: np.ndarray, X: np.ndarray) -> np.ndarray:
+        """A vertex (P1) or scalar-dof array interpolated at points X (dim, n)."""
         if X is self.mesh.p and a.shape == (self.mesh.nvertices,):
             return a.copy()
         b = self.vbasis if a.shape == (self.mesh.nvertices,) else self.sbasis
         cells, pts = self._locate(X)
-        out = np.zeros(n)
+        out = np.zeros(X.shape[1])
         for k in range(b.Nbfun):
             out += np.asarray(b.elem.gbasis(b.mapping, pts, k, tind=cells)[0])[..., 0] * \
                 a[b.element_dofs[k, cells]]
@@ -576,12 +574,7 @@ class FEMSubstrate:
         load : a ready nodal load vector (e.g. a coupling transfer's P^T F), added as is.
         """
         t0 = time.perf_counter()
-        if T_nodal is not None:
-            if dT_nodal is not None:
-                raise ValueError("give dT_nodal or T_nodal, not both")
-            T = T_nodal
-            dT_nodal = (lambda x: np.asarray(T(x)) - self.T0) if callable(T) else \
-                np.asarray(T, float) - self.T0
+        dT_nodal = temperature_change(dT_nodal, T_nodal, self.T0)
         f = self.basis.zeros()
         if dT_nodal is not None:
             f += self.thermal_load(dT_nodal)

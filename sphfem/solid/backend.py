@@ -40,7 +40,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from sphfem import kernels
-from sphfem.loads import at_points, temperature_change
+from sphfem.loads import at_points, scalar_at, temperature_change
 from sphfem.solid.body import SolidBody, _components
 from sphfem.solid.constitutive import lame
 from sphfem.solid.integrate import relax
@@ -231,10 +231,10 @@ class TLSPHSubstrate:
     # -- loads ---------------------------------------------------------------------------
     def _dT_at(self, spec, X) -> np.ndarray:
         """Temperature change at the points X (n, dim): scalar, callable or one value per
-        body particle (:mod:`sphfem.loads`)."""
-        a = None if spec is None or callable(spec) else np.asarray(spec, float)
-        if a is None or a.ndim == 0:
-            return at_points(spec, X.T).copy()
+        body particle (:func:`sphfem.loads.scalar_at`)."""
+        return scalar_at(spec, X.T, self._per_particle)
+
+    def _per_particle(self, a: np.ndarray) -> np.ndarray:
         if a.shape == (self.n_particles,):
             return a.copy()
         raise ValueError(f"dT: expected a scalar, a callable or {self.n_particles} values "
