@@ -403,9 +403,12 @@ class CouplingModule(PhysicsModule):
         if "c_heat" in ps and np.all(ps.c_heat[region] > 0):
             self.ledger = HeatLedger(ps, region)
         self._U, self._kappa = self._scales(sim, ps)
+        self._t_init = float(sim.t)
         d0 = fluid_region_distance(ps, sensors.region_mask, sim.period)
         self.clearance0 = d0 - sim.R if math.isfinite(d0) else None
-        if d0 < sim.R:
+        if d0 < sim.R and sim.t > 0.0:  # resumed from a checkpoint past contact
+            self.contact = self._resumed_in_contact(sim.t)
+        elif d0 < sim.R:
             self.contact = {"t_s": float(sim.t), "step": int(sim.step_count)}
             logger.warning("coupling: fluid within the support radius of the substrate at the "
                            "start (t = %g s): the substrate is loaded before impact; place "
@@ -442,7 +445,9 @@ class CouplingModule(PhysicsModule):
         if self.contact is None and self.clearance0 is not None:
             d = fluid_region_distance(sim.particles, self.driver.sensors.region_mask,
                                       sim.period, limit=sim.R)
-            if d < sim.R:
+            if d < sim.R and self.steps == 1 and sim.t > self._t_init:
+                self.contact = self._resumed_in_contact(sim.t)
+            elif d < sim.R:
                 self.contact = {"t_s": float(t_new), "step": int(sim.step_count + 1)}
                 logger.info("coupling: first contact at t = %g s", t_new)
         tm = self.scene.time
@@ -458,11 +463,20 @@ class CouplingModule(PhysicsModule):
         tp, tc = d.get("peak_von_mises_t_s"), d["t_contact_s"]
         d["peak_von_mises_t_after_contact_s"] = (tp - tc if tp is not None and tc is not None
                                                  else None)
+        if "last" in d and tc is not None:
+            d["last"]["t_after_contact_s"] = d["last"]["t"] - tc
         if self.ledger is not None:
             region = self.driver.sensors.region_mask(sim.particles)
             d["heat"] = self.ledger.figures(sim.particles, region)
         return d
 
+
+    @staticmethod
+    def _resumed_in_contact(t: float) -> dict:
+        """A run resumed from a checkpoint already past contact: its time is not known here."""
+        return {"t_s": None, "step": None,
+                "note": f"in contact when resumed at t = {t:g} s; the contact time is in the "
+                        f"summary.json of the earlier process"}
 
     def contact_record(self) -> dict:
         """First contact (``t_s``, ``step``; None if the fluid never came within R) with

@@ -185,3 +185,31 @@ def test_no_load_before_contact_and_contact_time(tmp_path, cache):
     assert t_pred * (1 - 1e-9) <= t_contact <= t_pred + dt_max * (1 + 1e-9)
     assert c["peak_von_mises_t_after_contact_s"] == pytest.approx(
         c["peak_von_mises_t_s"] - t_contact)
+
+
+def test_contact_after_resume(tmp_path, cache):
+    """A run resumed from a checkpoint before contact finds the same contact step as an
+    uninterrupted run; one resumed past contact says that its contact time is unknown
+    (it is in the earlier process's summary) instead of reporting the resume time."""
+    from sphfem.simulation import Simulation
+
+    gap = 1.2 * R
+    t_end = 1.2 * gap / SPEED
+    text = SCENE.format(gap=gap, speed=SPEED, t_end=t_end)
+    ref = Simulation(parse_scene_toml(text)).run(tmp_path / "ref", progress=False)
+    c_ref = ref["diagnostics"]["coupling"]["contact"]
+    assert c_ref["step"] is not None
+    for where, every, steps in (("before", 0.5 * c_ref["t_s"], c_ref["step"] - 2),
+                                ("after", 1.05 * c_ref["t_s"], c_ref["step"] + 10)):
+        out = tmp_path / where  # stop after `steps`; the checkpoint is the last output
+        stop = parse_scene_toml(text.replace("[time]\n", f"[time]\nmax_steps = {steps}\n")
+                                + f"[output]\nevery = {every!r}\n")
+        Simulation(stop).run(out, progress=False)
+        assert (out / "checkpoint.npz").exists()
+        full = parse_scene_toml(text + f"[output]\nevery = {every!r}\n")
+        c = Simulation(full).run(out, progress=False, resume=True)["diagnostics"][
+            "coupling"]["contact"]
+        if where == "before":  # output times split a step: the same contact within a step
+            assert abs(c["t_s"] - c_ref["t_s"]) <= ref["dt"]["max"]
+        else:
+            assert c["t_s"] is None and "resumed" in c["note"]
