@@ -117,3 +117,14 @@ def test_tlsph_backend_hands_over_the_total_force_exactly():
     landed = layer[np.argmin(np.abs(P[:, None, 0] - layer[None, :, 0]), axis=1)]
     assert np.allclose(book["moment_out"], point_moment(landed, F), rtol=1e-13, atol=0)
     assert np.allclose(book["moment_in"], point_moment(P, F), rtol=1e-13, atol=0)
+
+
+def test_tlsph_backend_from_the_factory_follows_the_protocol():
+    from coupling.backends import BACKENDS, SubstrateBackend, TLSPHBackend, make_backend
+
+    sub = _backend("tlsph").sub
+    be = make_backend("tlsph", substrate=sub, surface="top")
+    assert isinstance(be, TLSPHBackend) and isinstance(be, SubstrateBackend)
+    assert be.surface_plane == (1, 0.0, -1) and sorted(BACKENDS) == ["fem", "tlsph"]
+    with pytest.raises(ValueError, match="names box faces"):
+        TLSPHBackend(sub, "roof")
