@@ -134,19 +134,25 @@ def droplet_scene(quick: bool, *, speed: float = 50.0, c0: float | None = None,
                   ) -> dict:
     """A water droplet (D = 0.1 mm) hitting an alumina-like substrate block (wall particles,
     coupled to an FEM substrate when ``coupling`` is listed).  2D at dx = 5 um (quick) or 3D
-    at dx = 6.25 um; runs ``t_tc`` contact times D / speed (at rest: 0.4 ms, some 200
-    explicit thermal steps)."""
+    at dx = 6.25 um.  A moving droplet starts a support radius (3 dx) above the substrate and
+    runs ``t_tc`` contact times D / speed after reaching it; a droplet at rest lies on the
+    substrate one dx above it and runs 0.4 ms (some 200 explicit thermal steps)."""
     dim = 2 if quick else 3
     dx = dx or (5.0e-6 if quick else 6.25e-6)
     D = 1.0e-4
     half = 0.2e-3
     water = dict(WATER, mu=WATER["mu"] * mu_factor, c0=c0 if c0 else max(10.0 * speed, 500.0))
     lat = [-half] * (dim - 1)
-    t_end = t_tc * D / speed if speed > 0 else 4.0e-4  # at rest: ~200 thermal steps
+    # a moving droplet starts one support radius above the substrate (no pair interacts at
+    # t = 0) and runs t_tc contact times after touching it; at rest it lies on the substrate
+    R = 3.0 * dx
+    t_end = (t_tc * D + R) / speed if speed > 0 else 4.0e-4  # at rest: ~200 thermal steps
     drop = {"name": "droplet", "shape": "sphere", "kind": "fluid", "material": "water",
             "center": [0.0] * (dim - 1) + [0.5 * D + dx], "radius": 0.5 * D,
             "velocity": [0.0] * (dim - 1) + [-speed], "temperature": T_drop,
             "sampling": "lattice" if jitter else "poisson", "jitter": jitter}
+    if speed > 0:
+        drop.update(center=[0.0] * dim, above="substrate", gap=R)
     sub = {"name": "substrate", "shape": "box", "kind": "wall" if "fluid" in modules else "solid",
            "material": "alumina", "lo": lat + [-6 * dx], "hi": [half] * (dim - 1) + [0.0],
            "temperature": T_sub, "jitter": jitter}
