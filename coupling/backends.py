@@ -341,12 +341,8 @@ BACKENDS = {"fem": FEMBackend, "tlsph": TLSPHBackend}
 def make_backend(kind: str, **kw):
     """The backend ``kind`` of :data:`BACKENDS` built with ``kw``: ``"fem"`` ->
     :class:`FEMBackend` (substrate, surface, temperature_map, R, kernel); ``"tlsph"`` ->
-    :class:`TLSPHBackend` (substrate, surface), or from the scene with ``scene`` and
-    ``config`` (:meth:`TLSPHBackend.from_scene`; a ``sim`` keyword is accepted and unused)."""
+    :class:`TLSPHBackend` (substrate, surface)."""
     if kind not in BACKENDS:
         raise ValueError(f"unknown substrate backend {kind!r}; expected one of "
                          f"{sorted(BACKENDS)}")
-    if kind == "tlsph" and "scene" in kw:
-        kw.pop("sim", None)
-        return TLSPHBackend.from_scene(**kw)
     return BACKENDS[kind](**kw)

@@ -357,28 +357,20 @@ class CouplingModule(PhysicsModule):
         self.clearance0 = None
 
     def init(self, sim) -> None:
-        from coupling.backends import make_backend
-        from sphfem.geometry import Shape
+        from coupling.backends import FEMBackend, TLSPHBackend
+        from coupling.sensors import coupled_region
 
         sc, cfg = self.scene, self.cfg
-        names = cfg.blocks if cfg.blocks is not None else [
-            b.name for b in sc.blocks if b.material == cfg.material and b.kind in ("wall",
-                                                                                   "solid")]
-        blocks = [sc.blocks[sc.block_index(n)] for n in names]
-        shapes = [Shape.from_block(b, sc.dim) for b in blocks]
-        lo = np.min([s.bounds()[0] for s in shapes], axis=0)
-        hi = np.max([s.bounds()[1] for s in shapes], axis=0)
-        T0 = cfg.T0 if cfg.T0 is not None else float(blocks[0].temperature)
+        reg = coupled_region(sc, cfg)
+        names, shapes, lo, hi, T0 = reg.names, reg.shapes, reg.lo, reg.hi, reg.T0
         ps = sim.particles
         mats = [sc.material_index(cfg.material)]
         region_sel = SensorSet(shapes, mats, tol=1e-9 * float(np.max(hi - lo)))
         if cfg.backend == "fem":
-            sub = build_substrate(sc, cfg, lo, hi, T0)
-            backend = make_backend("fem", substrate=sub, surface=cfg.surface,
-                                   temperature_map=cfg.temperature_map, R=sim.R,
-                                   kernel=sc.sph.kernel)
+            backend = FEMBackend(build_substrate(sc, cfg, lo, hi, T0), cfg.surface,
+                                 cfg.temperature_map, R=sim.R, kernel=sc.sph.kernel)
         else:
-            backend = make_backend("tlsph", scene=sc, sim=sim, config=cfg)
+            backend = TLSPHBackend.from_scene(sc, cfg, reg)
         plane = getattr(backend, "surface_plane", None)
         surface = None
         if plane is not None:
