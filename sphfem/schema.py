@@ -398,28 +398,45 @@ def known_modules() -> list[str]:
     return names + [n for n in targets if n not in MODULES]
 
 
-#: top-level packages (besides sphfem's own sub-packages) whose import registers sections
-EXTRA_PACKAGES = ("coupling",)
+#: entry-point group through which installed packages add scene sections and physics
+#: modules: ``[project.entry-points."sphfem.physics"] name = "package"`` in their
+#: pyproject.toml; importing ``package`` registers them (sphfem names none of them)
+ENTRY_POINT_GROUP = "sphfem.physics"
 #: sphfem sub-packages that never register scene sections
 _NOT_PHYSICS = {"validation"}
 
 
+def plugin_packages() -> dict[str, str]:
+    """Installed packages that register sections, by entry-point name -> importable package
+    (group :data:`ENTRY_POINT_GROUP`; those whose package cannot be found are left out)."""
+    from importlib.metadata import entry_points
+
+    found = {}
+    for ep in entry_points(group=ENTRY_POINT_GROUP):
+        pkg = ep.value.split(":")[0]
+        if importlib.util.find_spec(pkg.split(".")[0]) is not None:
+            found[ep.name] = pkg
+    return found
+
+
 def physics_packages() -> list[str]:
-    """Importable packages that may register sections: sphfem sub-packages and coupling."""
+    """Importable packages that may register sections: sphfem sub-packages and the plugin
+    packages of :func:`plugin_packages`."""
     import sphfem
 
     names = [f"sphfem.{m.name}" for m in pkgutil.iter_modules(sphfem.__path__)
              if m.ispkg and m.name not in _NOT_PHYSICS]
-    names += [p for p in EXTRA_PACKAGES if importlib.util.find_spec(p) is not None]
-    return sorted(names)
+    names += list(plugin_packages().values())
+    return sorted(set(names))
 
 
 def import_for(name: str) -> None:
     """Import what registers module/section ``name``: ``sphfem.<name>`` and its target."""
     if not re.fullmatch(r"[A-Za-z_][A-Za-z0-9_]*", name or ""):
         return
-    if name in EXTRA_PACKAGES and importlib.util.find_spec(name) is not None:
-        importlib.import_module(name)  # top-level packages such as ``coupling``
+    plugins = plugin_packages()
+    if name in plugins:
+        importlib.import_module(plugins[name])  # an installed package registering ``name``
     pkg = f"sphfem.{name}"
     spec = importlib.util.find_spec(pkg) if name not in _NOT_PHYSICS else None
     if spec is not None and spec.submodule_search_locations is not None:  # a package

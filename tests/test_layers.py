@@ -36,8 +36,6 @@ SPHFEM_FILES = sorted(p.relative_to(ROOT).as_posix()
 
 #: sphfem files that still name coupling (issue 15), and what remains to do there
 STILL_NAMING_COUPLING = {
-    "sphfem/schema.py": "EXTRA_PACKAGES = ('coupling',): the scene loader imports coupling to "
-                        "find the [coupling] section; coupling should register it itself",
     "sphfem/validation/coupling.py": "the shear-transfer case imports coupling.backends, "
                                      "coupling.driver and coupling.sensors; it belongs to "
                                      "coupling",
