@@ -349,7 +349,7 @@ def test_shear_transfer_accuracy_criterion_can_fail():
     wrong fluid viscosity and for a transfer that loses the deeper wall layers' forces
     (sensors 0.4 R deep; the unassigned-force consistency check sees it too).  Measured at
     dx = H/30: 0.7 %, 4.3 %, 8.9 %."""
-    from sphfem.validation.coupling import STARTUP_TOL, run_shear_transfer, startup_errors
+    from coupling.validation import STARTUP_TOL, run_shear_transfer, startup_errors
 
     def err(**kw):
         r = run_shear_transfer(30, 0.1, solves=5, **kw)

@@ -29,7 +29,10 @@ CASES: dict[str, Callable[[bool], CaseResult]] = {}
 WARMUPS: dict[str, Callable[[], None] | None] = {}
 _CASE_MODULES = ("sphfem.validation.operators", "sphfem.validation.heat",
                  "sphfem.validation.fluid", "sphfem.validation.fem",
-                 "sphfem.validation.solid", "sphfem.validation.coupling")
+                 "sphfem.validation.solid")
+#: entry-point group of installed packages that register validation cases of their own
+#: (``coupling`` registers ``shear-transfer`` from ``coupling.validation``)
+CASE_ENTRY_POINT_GROUP = "sphfem.validation"
 
 
 @dataclass
@@ -107,9 +110,14 @@ def register(name: str, warmup: Callable[[], None] | None = None):
 
 
 def load_cases() -> dict[str, Callable]:
-    """Import every case module (each registers its cases) and return the registry."""
+    """Import every case module (each registers its cases), sphfem's own and those that
+    installed packages declare in :data:`CASE_ENTRY_POINT_GROUP`, and return the registry."""
+    from importlib.metadata import entry_points
+
     for mod in _CASE_MODULES:
         importlib.import_module(mod)
+    for ep in entry_points(group=CASE_ENTRY_POINT_GROUP):
+        importlib.import_module(ep.value.split(":")[0])
     return CASES
 
 
