@@ -23,6 +23,10 @@ import math
 import numpy as np
 from numba import njit
 
+#: LLVM fast-math flags of every numba kernel of sphfem (reassociation, contraction,
+#: approximate reciprocal and functions; no ``nnan``/``ninf``: NaN checks stay valid)
+FASTMATH = {"reassoc", "contract", "arcp", "afn"}
+
 WENDLAND_C2 = 0
 CUBIC_SPLINE = 1
 
