@@ -21,11 +21,9 @@ import numpy as np
 from numba import njit, prange
 
 from sphfem.fluid.eos import tait_density
-from sphfem.kernels import kernel_f
+from sphfem.kernels import FASTMATH, kernel_f
 from sphfem.neighbors import min_image
 from sphfem.particles import FLUID, WALL
-
-FASTMATH = {"reassoc", "contract", "arcp", "afn"}
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
