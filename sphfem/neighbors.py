@@ -43,7 +43,7 @@ import numpy as np
 from numba import njit, prange
 from numba.cpython.unsafe.numbers import trailing_zeros
 
-FASTMATH = {"reassoc", "contract", "arcp", "afn"}
+from sphfem.kernels import FASTMATH  # noqa: F401  (re-exported for sphfem.density)
 
 # relative slack on cell widths: a pair at distance exactly ``radius`` never spans more
 # than ``reach`` cells, whatever the rounding of (x - origin) / width.
