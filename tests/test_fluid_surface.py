@@ -9,7 +9,7 @@ import pytest
 
 from sphfem.fluid import FluidParams, FluidSolver
 from sphfem.fluid.setup import lattice, make_particles
-from sphfem.fluid.surface import iif_accel, iif_constant, iif_sigma
+from sphfem.fluid.surface_tension_iif_tartakovsky2005 import iif_accel, iif_constant, iif_sigma
 from sphfem.neighbors import build_neighbor_list
 from sphfem.particles import FLUID
 

@@ -1,12 +1,14 @@
 """The ``[fluid]`` scene section (declared once: validation, defaults and docs/scenes.md).
 
-Pure declarations: importing this module compiles nothing.  Material properties of the
-fluid (``rho0``, ``c0``, ``mu``, ``sigma``) come from the ``[materials.<name>]`` tables of
-the fluid blocks; this section holds the numerical model.
+Pure declarations: importing this module compiles nothing (the surface-tension methods'
+keys and choices come from the registry :mod:`sphfem.fluid.surface_tension`).  Material
+properties of the fluid (``rho0``, ``c0``, ``mu``, ``sigma``) come from the
+``[materials.<name>]`` tables of the fluid blocks; this section holds the numerical model.
 """
 
 from __future__ import annotations
 
+from sphfem.fluid import surface_tension
 from sphfem.schema import VECTOR, Param, Section
 
 
@@ -37,7 +39,7 @@ def _check(rec, ctx, path):
                                      "viscosity mu [Pa s] (or set [fluid] viscosity = \"none\")")
         if rec.surface_tension != "none":
             # the calibration constant's key exists only for its own model (Param.when)
-            key = {"iif": "iif_s", "akinci": "akinci_gamma"}.get(rec.surface_tension)
+            key = surface_tension.lookup(rec.surface_tension).constant_key
             const = rec[key] if key is not None else None
             if const is None and m.sigma is None:
                 ctx.error(f"{where}.sigma", f"missing: surface_tension = "
@@ -85,27 +87,9 @@ FLUID = Section("fluid", (
     Param("threads", int, 0, ge=0,
           doc="numba threads of the fluid passes (0: one below 20000 particles, else "
               "numba's default)"),
-    Param("surface_tension", str, "none", choices=("none", "csf", "iif", "akinci"),
-          doc="csf (recommended): continuum surface force sigma kappa n delta_s of "
-              "Brackbill et al. (1992) in a single-phase free-surface SPH form (colour "
-              "gradient of the kernel sum, curvature from the valid normals with a "
-              "tangential-moment correction, see sphfem.fluid.surface_tension_csf), the "
-              "material's sigma used directly, checked against the Laplace pressure and "
-              "Rayleigh's droplet period; use it with alpha ~ 0.02 (damps particle-scale "
-              "surface noise at fine resolution); iif: inter-particle interaction force "
-              "(Tartakovsky & Meakin 2005 with the mass weighting of Park 2019 eq. 2.78), "
-              "calibrated to the material's sigma "
-              "by the half-space integral of the pair potential; akinci: cohesion + "
-              "curvature of Akinci et al. (2013), gamma from sigma by the cohesion "
-              "integral (see sphfem.fluid.surface); iif and akinci fail the droplet "
-              "oscillation check (sphfem validate droplet-oscillation)"),
-    Param("iif_s", float, None, unit="N", positive=True, quantity="force",
-          when=("surface_tension", ("iif",)),
-          doc="calibration constant s of the IIF pair force (the thesis' \"1e6 N\"); "
-              "unset: computed from the material's sigma [N/m]"),
-    Param("akinci_gamma", float, None, positive=True, when=("surface_tension", ("akinci",)),
-          doc="Akinci coefficient gamma [m^(dim+1)/(kg s^2)]; unset: computed from the "
-              "material's sigma [N/m]"),
+    Param("surface_tension", str, "none", choices=surface_tension.names(),
+          doc=surface_tension.choices_doc()),
+    *surface_tension.scene_params(),
     Param("shifting", str, "none", choices=("none", "interior", "all"),
           doc="particle shifting dr = -A h |v| dt grad C (Skillen et al. 2013, Xu & Yu "
               "2018, Park 2019 sec. 2.1.6): interior = only particles away from the free "

@@ -42,7 +42,7 @@ import numpy as np
 from numba import njit, prange
 
 from sphfem import kernels
-from sphfem.fluid import passes, surface, surface_tension_csf
+from sphfem.fluid import passes, surface, surface_tension
 from sphfem.fluid.eos import tait_B
 from sphfem.fluid.guards import check_fluid
 from sphfem.fluid.walls_adami2012 import adami_wall_state
@@ -104,12 +104,16 @@ class FluidParams:
     threads    numba threads for the fluid passes (0: automatic -- one thread below
                ``SERIAL_BELOW`` particles, where thread start-up costs more than it saves,
                numba's default above)
-    surface_tension  "none", "csf" (continuum surface force, recommended; see
-               :mod:`sphfem.fluid.surface_tension_csf`), "iif" (Park 2019 eq. 2.78) or
-               "akinci" (Akinci et al. 2013); see :mod:`sphfem.fluid.surface`
+    surface_tension  "none" or a method of the registry :mod:`sphfem.fluid.surface_tension`:
+               "csf" (continuum surface force, recommended;
+               :mod:`~sphfem.fluid.surface_tension_csf`), "iif" (Park 2019 eq. 2.78;
+               :mod:`~sphfem.fluid.surface_tension_iif_tartakovsky2005`) or "akinci"
+               (:mod:`~sphfem.fluid.surface_tension_akinci2013`)
     sigma      physical surface tension [N/m] (calibrates the model's constant)
-    iif_s      IIF calibration constant s [N] (None: from sigma, :func:`surface.iif_constant`)
+    iif_s      IIF calibration constant s [N] (None: from sigma)
     akinci_gamma  Akinci coefficient [m^(dim+1)/(kg s^2)] (None: from sigma)
+    st_params  the surface-tension method's own ``[fluid]`` keys (name -> value; a method
+               without a field here reads its keys from this dict)
     shifting   "none", "interior" (only particles away from the free surface) or "all"
                (free-surface and near-surface particles shifted tangentially)
     shifting_coef  A of dr = -A h |v| dt grad C [-]
@@ -139,6 +143,7 @@ class FluidParams:
     sigma: float = 0.0
     iif_s: float | None = None
     akinci_gamma: float | None = None
+    st_params: dict = field(default_factory=dict)
     shifting: str = "none"
     shifting_coef: float = 5.0 / 3.0
     detect_free_surface: bool = False
@@ -152,12 +157,12 @@ class FluidParams:
         lo, hi = self.rho_ratio_band
         if not 0 < lo < 1 < hi:
             raise ValueError(f"rho_ratio_band must satisfy 0 < lo < 1 < hi, got {(lo, hi)}")
-        if self.surface_tension not in ("none", "iif", "akinci", "csf"):
-            raise ValueError(f"unknown surface_tension model {self.surface_tension!r}")
+        method = surface_tension.lookup(self.surface_tension)  # ValueError if unknown
         if self.shifting not in ("none", "interior", "all"):
             raise ValueError(f"unknown shifting mode {self.shifting!r}")
-        if self.surface_tension != "none":
-            const = {"iif": self.iif_s, "akinci": self.akinci_gamma}.get(self.surface_tension)
+        if method is not None:
+            key = method.constant_key
+            const = self.st_params.get(key, getattr(self, key, None)) if key else None
             if const is None and not self.sigma > 0:
                 raise ValueError(f"surface_tension = {self.surface_tension!r} needs sigma > 0 "
                                  "[N/m] or its calibration constant")
@@ -349,7 +354,7 @@ class FluidSolver:
         #: run the force pass over the in-range rows compacted by the density-gradient
         #: pass (False: over the full filtered Verlet list; same results, for tests)
         self.compact_rows = True
-        self._csf = None
+        self._st_state = None  # work arrays of the surface-tension method
         self._xref = None
         if self.params.threads:
             self.nthreads = self.params.threads
@@ -365,19 +370,12 @@ class FluidSolver:
     def _surface_constants(self) -> None:
         """Calibration constant of the surface-tension model and the sigma it represents."""
         pa = self.params
+        self.st_method = surface_tension.lookup(pa.surface_tension)
         self.st_constant = None
         self.st_sigma = pa.sigma
-        if pa.surface_tension == "iif":
-            self.st_constant = (pa.iif_s if pa.iif_s is not None else
-                                surface.iif_constant(pa.sigma, pa.rho0, self.m_bar, self.R,
-                                                     self.dim))
-            self.st_sigma = surface.iif_sigma(self.st_constant, pa.rho0, self.m_bar, self.R,
-                                              self.dim)
-        elif pa.surface_tension == "akinci":
-            self.st_constant = (pa.akinci_gamma if pa.akinci_gamma is not None else
-                                surface.akinci_constant(pa.sigma, pa.rho0, self.R, self.dim))
-            self.st_sigma = (self.st_constant * pa.rho0**2 * self.R**2
-                             * surface.AKINCI_C[self.dim])
+        if self.st_method is not None:
+            self.st_constant, self.st_sigma = self.st_method.calibrate(pa, self.m_bar, self.R,
+                                                                       self.dim)
 
     @property
     def p(self) -> ParticleSet:
@@ -499,20 +497,8 @@ class FluidSolver:
         passes.fluid_forces(s.P, p.kind, nl.offsets, cnt, nb, self.R, self.sigma,
                             self.kkind, self.period, g, pa.eps_visc * self.h * self.h,
                             delta_coef, pa.alpha * self.h * pa.c0, p.acc, p.drho, p.f_fluid)
-        if pa.surface_tension == "iif":
-            surface.iif_accel(p.x, p.m, p.kind, nl.offsets, nl.indices, self.R,
-                              self.st_constant, self.m_bar, self.period, p.acc)
-        elif pa.surface_tension == "akinci":
-            surface.color_gradient(p.x, s.V, p.kind, nl.offsets, nl.indices, self.R,
-                                   self.sigma, self.kkind, self.period, True, s.nrm)
-            s.nrm *= self.R
-            surface.akinci_accel(p.x, p.m, p.rho, p.kind, nl.offsets, nl.indices, self.R,
-                                 self.st_constant, pa.rho0, self.m_bar, self.period, s.nrm,
-                                 p.acc)
-        elif pa.surface_tension == "csf":
-            self._csf = surface_tension_csf.csf_state(self._csf, p.n, self.dim)
-            self._csf.accumulate(p.x, s.V, p.rho, p.kind, nl.offsets, nl.indices, self.R,
-                                 self.sigma, self.kkind, self.period, self.st_sigma, p.acc)
+        if self.st_method is not None:  # the registered method (sphfem.fluid.surface_tension)
+            self._st_state = self.st_method.accelerate(self, self._st_state)
         if pa.uses_free_surface:
             surface.free_surface(p.x, s.V, p.kind, nl.offsets, nl.indices, self.R,
                                  self.sigma, self.kkind, self.period, pa.cond_max, s.gc,
@@ -667,6 +653,9 @@ def params_from_scene(scene) -> FluidParams:
         kw = {k: cfg[k] for k in cfg if k in names}
         kw["rho_ratio_band"] = tuple(cfg.rho_ratio_band)
         kw["gravity"] = tuple(cfg.gravity)
+        method = surface_tension.lookup(cfg.surface_tension)
+        if method is not None:
+            kw["st_params"] = {q.name: cfg[q.name] for q in method.params if q.name in cfg}
     kw["cfl"] = scene.time.cfl
     kw["skin"] = 0.15 if scene.sph.skin is None else scene.sph.skin
     kw["sort_every"] = scene.sph.sort_every
