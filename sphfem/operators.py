@@ -2,7 +2,9 @@
 
 Notation: for particle i and neighbour j, ``r = x_j - x_i`` (minimum image on periodic
 axes), ``e = r/|r|``, ``V_j = m_j/rho_j`` and ``gW = grad_i W(|x_i - x_j|)`` (points from i
-towards j because dW/dr <= 0).  All kernels *gather*: iteration i writes only row i.
+towards j because dW/dr <= 0), ``kernel_code`` the integer of :func:`sphfem.kernels.kernel_code`
+(not a particle kind).  All kernels *gather*: iteration i writes only row i.  Pair
+separation and small inverses come from :mod:`sphfem.smallmat`.
 
 Operators (equation numbers of Park (2019) in brackets, sources in the docstrings):
 
@@ -27,95 +29,33 @@ import numpy as np
 import scipy.sparse as sp
 from numba import njit, prange
 
-from sphfem.kernels import kernel_dfdq, kernel_f
-from sphfem.neighbors import min_image
-
-FASTMATH = {"reassoc", "contract", "arcp", "afn"}
+from sphfem.kernels import FASTMATH, kernel_dfdq, kernel_f
+from sphfem.smallmat import invert_small, store_renormalisation
+from sphfem.smallmat import pair_vector as _pair
 
 #: default largest accepted 1-norm condition number of a correction matrix
 COND_MAX = 1e8
 
 
-@njit(cache=True, inline="always")
-def _pair(x, i, j, period, r):
-    """Fill r = x_j - x_i (minimum image) and return |r|."""
-    s = 0.0
-    for k in range(x.shape[1]):
-        d = min_image(x[j, k] - x[i, k], period[k])
-        r[k] = d
-        s += d * d
-    return np.sqrt(s)
-
-
-@njit(cache=True)
-def invert_small(A, Ainv):
-    """Gauss-Jordan inverse with partial pivoting of a small dense matrix.
-
-    Writes A^-1 into ``Ainv`` and returns the 1-norm condition number ||A|| ||A^-1||
-    (``inf`` when a pivot vanishes).  Used for the 1x1 to 6x6 correction systems.
-    """
-    n = A.shape[0]
-    a = A.copy()
-    for p in range(n):
-        for q in range(n):
-            Ainv[p, q] = 1.0 if p == q else 0.0
-    norm_a = 0.0
-    for q in range(n):
-        s = 0.0
-        for p in range(n):
-            s += abs(A[p, q])
-        norm_a = max(norm_a, s)
-    if norm_a == 0.0:
-        return np.inf
-    for c in range(n):
-        piv = c
-        for p in range(c + 1, n):
-            if abs(a[p, c]) > abs(a[piv, c]):
-                piv = p
-        if abs(a[piv, c]) <= 1e-300 or abs(a[piv, c]) < 1e-14 * norm_a:
-            return np.inf
-        if piv != c:
-            for q in range(n):
-                a[c, q], a[piv, q] = a[piv, q], a[c, q]
-                Ainv[c, q], Ainv[piv, q] = Ainv[piv, q], Ainv[c, q]
-        d = 1.0 / a[c, c]
-        for q in range(n):
-            a[c, q] *= d
-            Ainv[c, q] *= d
-        for p in range(n):
-            if p != c and a[p, c] != 0.0:
-                f = a[p, c]
-                for q in range(n):
-                    a[p, q] -= f * a[c, q]
-                    Ainv[p, q] -= f * Ainv[c, q]
-    norm_i = 0.0
-    for q in range(n):
-        s = 0.0
-        for p in range(n):
-            s += abs(Ainv[p, q])
-        norm_i = max(norm_i, s)
-    return norm_a * norm_i
-
-
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
-def interpolate(f, x, vol, offsets, indices, R, sigma, kind, period):
+def interpolate(f, x, vol, offsets, indices, R, sigma, kernel_code, period):
     """Kernel interpolation f_i = V_i f_i W(0) + sum_j V_j f_j W_ij (f scalar per particle)."""
     n = x.shape[0]
     out = np.empty(n)
-    w0 = sigma * kernel_f(0.0, kind)
+    w0 = sigma * kernel_f(0.0, kernel_code)
     for i in prange(n):
         r = np.empty(x.shape[1])
         acc = vol[i] * f[i] * w0
         for jj in range(offsets[i], offsets[i + 1]):
             j = indices[jj]
             d = _pair(x, i, j, period, r)
-            acc += vol[j] * f[j] * sigma * kernel_f(d / R, kind)
+            acc += vol[j] * f[j] * sigma * kernel_f(d / R, kernel_code)
         out[i] = acc
     return out
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
-def gradient(f, x, vol, offsets, indices, R, sigma, kind, period):
+def gradient(f, x, vol, offsets, indices, R, sigma, kernel_code, period):
     """Difference-form gradient sum_j V_j (f_j - f_i) grad_i W_ij, shape (n, dim)."""
     n, dim = x.shape
     out = np.zeros((n, dim))
@@ -126,14 +66,14 @@ def gradient(f, x, vol, offsets, indices, R, sigma, kind, period):
             d = _pair(x, i, j, period, r)
             if d == 0.0:
                 continue
-            s = vol[j] * (f[j] - f[i]) * (-sigma * kernel_dfdq(d / R, kind) / (R * d))
+            s = vol[j] * (f[j] - f[i]) * (-sigma * kernel_dfdq(d / R, kernel_code) / (R * d))
             for k in range(dim):
                 out[i, k] += s * r[k]
     return out
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
-def _renormalisation_matrix(x, vol, offsets, indices, R, sigma, kind, period, cond_max):
+def _renormalisation_matrix(x, vol, offsets, indices, R, sigma, kernel_code, period, cond_max):
     n, dim = x.shape
     B = np.zeros((n, dim, dim))
     ok = np.zeros(n, dtype=np.bool_)
@@ -145,33 +85,29 @@ def _renormalisation_matrix(x, vol, offsets, indices, R, sigma, kind, period, co
             d = _pair(x, i, j, period, r)
             if d == 0.0:
                 continue
-            s = vol[j] * (-sigma * kernel_dfdq(d / R, kind) / (R * d))
+            s = vol[j] * (-sigma * kernel_dfdq(d / R, kernel_code) / (R * d))
             for p in range(dim):
                 for q in range(dim):
                     M[p, q] += s * r[p] * r[q]
         Bi = np.empty((dim, dim))
-        cond = invert_small(M, Bi)
-        if cond <= cond_max:
-            ok[i] = True
-            B[i] = Bi
-        else:
-            for p in range(dim):
-                B[i, p, p] = 1.0
+        store_renormalisation(M, Bi, cond_max, B, ok, i)
     return B, ok
 
 
-def renormalisation_matrix(x, vol, offsets, indices, R, sigma, kind, period, cond_max=COND_MAX):
+def renormalisation_matrix(x, vol, offsets, indices, R, sigma, kernel_code, period,
+                           cond_max=COND_MAX):
     """Renormalisation matrices B_i = [sum_j V_j grad_i W_ij (x) r_ij]^-1 (Park eq. 2.6).
 
     Returns ``(B, ok)``: B has shape (n, dim, dim); where the moment matrix is singular or
     worse conditioned than ``cond_max``, ``ok[i]`` is False and ``B[i]`` is the identity
     (the plain operator).  ``(~ok).sum()`` is the fallback count for diagnostics.
     """
-    return _renormalisation_matrix(x, vol, offsets, indices, R, sigma, kind, period, cond_max)
+    return _renormalisation_matrix(x, vol, offsets, indices, R, sigma, kernel_code, period,
+                                   cond_max)
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
-def renormalised_gradient(f, B, x, vol, offsets, indices, R, sigma, kind, period):
+def renormalised_gradient(f, B, x, vol, offsets, indices, R, sigma, kernel_code, period):
     """First-order consistent gradient B_i sum_j V_j (f_j - f_i) grad_i W_ij (Park eq. 2.5)."""
     n, dim = x.shape
     out = np.zeros((n, dim))
@@ -183,7 +119,7 @@ def renormalised_gradient(f, B, x, vol, offsets, indices, R, sigma, kind, period
             d = _pair(x, i, j, period, r)
             if d == 0.0:
                 continue
-            s = vol[j] * (f[j] - f[i]) * (-sigma * kernel_dfdq(d / R, kind) / (R * d))
+            s = vol[j] * (f[j] - f[i]) * (-sigma * kernel_dfdq(d / R, kernel_code) / (R * d))
             for k in range(dim):
                 g[k] += s * r[k]
         for p in range(dim):
@@ -195,7 +131,7 @@ def renormalised_gradient(f, B, x, vol, offsets, indices, R, sigma, kind, period
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
-def _divergence(u, B, use_b, x, vol, offsets, indices, R, sigma, kind, period):
+def _divergence(u, B, use_b, x, vol, offsets, indices, R, sigma, kernel_code, period):
     n, dim = x.shape
     out = np.zeros(n)
     for i in prange(n):
@@ -206,7 +142,7 @@ def _divergence(u, B, use_b, x, vol, offsets, indices, R, sigma, kind, period):
             d = _pair(x, i, j, period, r)
             if d == 0.0:
                 continue
-            s = vol[j] * (-sigma * kernel_dfdq(d / R, kind) / (R * d))
+            s = vol[j] * (-sigma * kernel_dfdq(d / R, kernel_code) / (R * d))
             for k in range(dim):
                 du = s * (u[j, k] - u[i, k])
                 for p in range(dim):
@@ -222,7 +158,7 @@ def _divergence(u, B, use_b, x, vol, offsets, indices, R, sigma, kind, period):
     return out
 
 
-def divergence(u, x, vol, offsets, indices, R, sigma, kind, period, B=None):
+def divergence(u, x, vol, offsets, indices, R, sigma, kernel_code, period, B=None):
     """Divergence sum_j V_j (u_j - u_i) . grad_i W_ij; renormalised with ``B`` when given.
 
     With B: div u_i = sum_kp B_i^{kp} sum_j V_j (u_j^k - u_i^k) (grad_i W_ij)^p, exact for
@@ -231,11 +167,11 @@ def divergence(u, x, vol, offsets, indices, R, sigma, kind, period, B=None):
     n, dim = x.shape
     use_b = B is not None
     Bm = B if use_b else np.zeros((1, dim, dim))
-    return _divergence(u, Bm, use_b, x, vol, offsets, indices, R, sigma, kind, period)
+    return _divergence(u, Bm, use_b, x, vol, offsets, indices, R, sigma, kernel_code, period)
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
-def laplacian_weights_brookshaw(x, vol, offsets, indices, R, sigma, kind, period):
+def laplacian_weights_brookshaw(x, vol, offsets, indices, R, sigma, kernel_code, period):
     """Pair weights of Brookshaw's Laplacian (Brookshaw 1985; Cleary & Monaghan 1999, eq. 2.10):
 
     lap f_i = sum_j 2 V_j (f_i - f_j) (x_ij . grad_i W_ij) / |x_ij|^2 = sum_j w_ij (f_j - f_i)
@@ -249,7 +185,7 @@ def laplacian_weights_brookshaw(x, vol, offsets, indices, R, sigma, kind, period
             j = indices[jj]
             d = _pair(x, i, j, period, r)
             if d > 0.0:
-                w[jj] = -2.0 * vol[j] * sigma * kernel_dfdq(d / R, kind) / (R * d)
+                w[jj] = -2.0 * vol[j] * sigma * kernel_dfdq(d / R, kernel_code) / (R * d)
     return w
 
 
@@ -262,7 +198,7 @@ def _sym_index(o, p, dim):
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
-def _laplacian_weights_corrected(x, vol, offsets, indices, R, sigma, kind, period, cond_max):
+def _laplacian_weights_corrected(x, vol, offsets, indices, R, sigma, kernel_code, period, cond_max):
     n, dim = x.shape
     ns = dim * (dim + 1) // 2
     w = np.zeros(indices.shape[0])
@@ -276,7 +212,7 @@ def _laplacian_weights_corrected(x, vol, offsets, indices, R, sigma, kind, perio
             d = _pair(x, i, j, period, r)
             if d == 0.0:
                 continue
-            s = vol[j] * (-sigma * kernel_dfdq(d / R, kind) / (R * d))  # gW = s r
+            s = vol[j] * (-sigma * kernel_dfdq(d / R, kernel_code) / (R * d))  # gW = s r
             for p in range(dim):
                 for q in range(dim):
                     M[p, q] += s * r[p] * r[q]
@@ -303,7 +239,7 @@ def _laplacian_weights_corrected(x, vol, offsets, indices, R, sigma, kind, perio
                 d = _pair(x, i, j, period, r)
                 if d == 0.0:
                     continue
-                s = vol[j] * (-sigma * kernel_dfdq(d / R, kind) / (R * d))
+                s = vol[j] * (-sigma * kernel_dfdq(d / R, kernel_code) / (R * d))
                 for m in range(dim):
                     for q in range(m, dim):
                         am = 0.0
@@ -337,7 +273,7 @@ def _laplacian_weights_corrected(x, vol, offsets, indices, R, sigma, kind, perio
                 j = indices[jj]
                 d = _pair(x, i, j, period, r)
                 if d > 0.0:
-                    w[jj] = -2.0 * vol[j] * sigma * kernel_dfdq(d / R, kind) / (R * d)
+                    w[jj] = -2.0 * vol[j] * sigma * kernel_dfdq(d / R, kernel_code) / (R * d)
             continue
         ok[i] = True
         # lap f_i = sum_j c_ij [(f_j - f_i) - r . g_i],  c_ij = 2 V_j (L : e (x) gW) / |r|,
@@ -348,7 +284,7 @@ def _laplacian_weights_corrected(x, vol, offsets, indices, R, sigma, kind, perio
             d = _pair(x, i, j, period, r)
             if d == 0.0:
                 continue
-            s = vol[j] * (-sigma * kernel_dfdq(d / R, kind) / (R * d))
+            s = vol[j] * (-sigma * kernel_dfdq(d / R, kernel_code) / (R * d))
             le = 0.0
             for o in range(dim):
                 for p in range(dim):
@@ -368,7 +304,7 @@ def _laplacian_weights_corrected(x, vol, offsets, indices, R, sigma, kind, perio
             d = _pair(x, i, j, period, r)
             if d == 0.0:
                 continue
-            s = vol[j] * (-sigma * kernel_dfdq(d / R, kind) / (R * d))
+            s = vol[j] * (-sigma * kernel_dfdq(d / R, kernel_code) / (R * d))
             ag = 0.0
             for k in range(dim):
                 ag += a[k] * r[k]
@@ -377,7 +313,7 @@ def _laplacian_weights_corrected(x, vol, offsets, indices, R, sigma, kind, perio
 
 
 def laplacian_weights_corrected(
-    x, vol, offsets, indices, R, sigma, kind, period, cond_max=COND_MAX
+    x, vol, offsets, indices, R, sigma, kernel_code, period, cond_max=COND_MAX
 ):
     """Pair weights of the Fatehi & Manzari (2011) second-order consistent Laplacian.
 
@@ -394,7 +330,7 @@ def laplacian_weights_corrected(
     ``cond_max`` fall back to Brookshaw weights and have ``ok[i] = False``.
     """
     return _laplacian_weights_corrected(
-        x, vol, offsets, indices, R, sigma, kind, period, cond_max
+        x, vol, offsets, indices, R, sigma, kernel_code, period, cond_max
     )
 
 

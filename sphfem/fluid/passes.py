@@ -30,11 +30,13 @@ import numpy as np
 from numba import njit, prange
 
 from sphfem.fluid.eos import tait_pressure
-from sphfem.kernels import WENDLAND_C2, kernel_dfdq
-from sphfem.neighbors import min_image
+from sphfem.kernels import FASTMATH, WENDLAND_C2, kernel_dfdq
 from sphfem.particles import FLUID, WALL
 
-FASTMATH = {"reassoc", "contract", "arcp", "afn"}
+# shared small kernels under the names the fluid modules import from here
+from sphfem.smallmat import invert3 as _invert  # noqa: F401  (sphfem.fluid.surface)
+from sphfem.smallmat import invert_sym3 as _invert_sym
+from sphfem.smallmat import pair_sep as _sep
 
 #: iterations (blocks of rows) of the pair passes' parallel loops (see :func:`_block`)
 NBLOCKS = 64
@@ -91,17 +93,17 @@ def prepare_all(rho, p, m, vol, kind, pr, V, meff, isf):
 
 
 @njit(cache=True, inline="always")
-def _F(d, R, fac2, kkind):
+def _F(d, R, fac2, kernel_code):
     """F = -dW/dr / d for the support radius R, ``fac2 = sigma / R^2``.
 
     Wendland C2: f'(q) = -20 q (1 - q)^3, so F = 20 sigma (1 - q)^3 / R^2 without a
     division by d.
     """
     q = d / R
-    if kkind == WENDLAND_C2:
+    if kernel_code == WENDLAND_C2:
         a = 1.0 - q
         return fac2 * 20.0 * a * a * a
-    return -fac2 * kernel_dfdq(q, kkind) / q
+    return -fac2 * kernel_dfdq(q, kernel_code) / q
 
 
 def _view_keep():
@@ -172,125 +174,6 @@ def _gather_rows(offsets, new_off, buf, out):
 
 
 @njit(cache=True, inline="always")
-def _sep(x, i, j, dim, period, periodic):
-    """Components of r = x_j - x_i (zero-padded to 3) with the minimum image if needed."""
-    r0 = x[j, 0] - x[i, 0]
-    r1 = x[j, 1] - x[i, 1] if dim > 1 else 0.0
-    r2 = x[j, 2] - x[i, 2] if dim > 2 else 0.0
-    if periodic:
-        r0 = min_image(r0, period[0])
-        if dim > 1:
-            r1 = min_image(r1, period[1])
-        if dim > 2:
-            r2 = min_image(r2, period[2])
-    return r0, r1, r2
-
-
-@njit(cache=True, inline="always")
-def _invert(M, dim, Binv, cond_max):
-    """Explicit inverse of a 1x1..3x3 matrix into ``Binv``; False if worse than cond_max."""
-    na = 0.0
-    for q in range(dim):
-        s = 0.0
-        for p in range(dim):
-            s += abs(M[p, q])
-        na = max(na, s)
-    if na == 0.0:
-        return False
-    if dim == 1:
-        Binv[0, 0] = 1.0 / M[0, 0]
-    elif dim == 2:
-        det = M[0, 0] * M[1, 1] - M[0, 1] * M[1, 0]
-        if abs(det) < 1e-14 * na * na:
-            return False
-        Binv[0, 0] = M[1, 1] / det
-        Binv[0, 1] = -M[0, 1] / det
-        Binv[1, 0] = -M[1, 0] / det
-        Binv[1, 1] = M[0, 0] / det
-    else:
-        c00 = M[1, 1] * M[2, 2] - M[1, 2] * M[2, 1]
-        c01 = M[1, 2] * M[2, 0] - M[1, 0] * M[2, 2]
-        c02 = M[1, 0] * M[2, 1] - M[1, 1] * M[2, 0]
-        det = M[0, 0] * c00 + M[0, 1] * c01 + M[0, 2] * c02
-        if abs(det) < 1e-14 * na * na * na:
-            return False
-        idet = 1.0 / det
-        Binv[0, 0] = c00 * idet
-        Binv[1, 0] = c01 * idet
-        Binv[2, 0] = c02 * idet
-        Binv[0, 1] = (M[0, 2] * M[2, 1] - M[0, 1] * M[2, 2]) * idet
-        Binv[1, 1] = (M[0, 0] * M[2, 2] - M[0, 2] * M[2, 0]) * idet
-        Binv[2, 1] = (M[0, 1] * M[2, 0] - M[0, 0] * M[2, 1]) * idet
-        Binv[0, 2] = (M[0, 1] * M[1, 2] - M[0, 2] * M[1, 1]) * idet
-        Binv[1, 2] = (M[0, 2] * M[1, 0] - M[0, 0] * M[1, 2]) * idet
-        Binv[2, 2] = (M[0, 0] * M[1, 1] - M[0, 1] * M[1, 0]) * idet
-    ni = 0.0
-    for q in range(dim):
-        s = 0.0
-        for p in range(dim):
-            s += abs(Binv[p, q])
-        ni = max(ni, s)
-    c = na * ni
-    return c <= cond_max and np.isfinite(c)
-
-
-@njit(cache=True, inline="always")
-def _invert_sym(m00, m01, m02, m11, m12, m22, dim, cond_max):
-    """:func:`_invert` of the symmetric matrix [[m00 m01 m02] [m01 m11 m12] [m02 m12 m22]]
-    on scalars (no temporary arrays): (good, b00, b01, b02, b10, b11, b12, b20, b21, b22)."""
-    M = ((m00, m01, m02), (m01, m11, m12), (m02, m12, m22))
-    na = 0.0
-    for q in range(dim):
-        s = 0.0
-        for p in range(dim):
-            s += abs(M[p][q])
-        na = max(na, s)
-    b00 = b01 = b02 = b10 = b11 = b12 = b20 = b21 = b22 = 0.0
-    good = na != 0.0
-    if good:
-        if dim == 1:
-            b00 = 1.0 / m00
-        elif dim == 2:
-            det = m00 * m11 - m01 * m01
-            if abs(det) < 1e-14 * na * na:
-                good = False
-            else:
-                b00 = m11 / det
-                b01 = -m01 / det
-                b10 = -m01 / det
-                b11 = m00 / det
-        else:
-            c00 = m11 * m22 - m12 * m12
-            c01 = m12 * m02 - m01 * m22
-            c02 = m01 * m12 - m11 * m02
-            det = m00 * c00 + m01 * c01 + m02 * c02
-            if abs(det) < 1e-14 * na * na * na:
-                good = False
-            else:
-                idet = 1.0 / det
-                b00 = c00 * idet
-                b10 = c01 * idet
-                b20 = c02 * idet
-                b01 = (m02 * m12 - m01 * m22) * idet
-                b11 = (m00 * m22 - m02 * m02) * idet
-                b21 = (m01 * m02 - m00 * m12) * idet
-                b02 = (m01 * m12 - m02 * m11) * idet
-                b12 = (m02 * m01 - m00 * m12) * idet
-                b22 = (m00 * m11 - m01 * m01) * idet
-    if good:
-        B = ((b00, b01, b02), (b10, b11, b12), (b20, b21, b22))
-        ni = 0.0
-        for q in range(dim):
-            s = 0.0
-            for p in range(dim):
-                s += abs(B[p][q])
-            ni = max(ni, s)
-        c = na * ni
-        good = c <= cond_max and np.isfinite(c)
-    return good, b00, b01, b02, b10, b11, b12, b20, b21, b22
-
-
-@njit(cache=True, inline="always")
 def _emit_other_row(x, kind, i, offsets, indices, R2, dim, period, periodic, nb):
     """Compact a non-fluid row: a wall keeps its fluid neighbours with 0 < r < R
     (branch-free: every entry is stored, the slot advances only when it is kept)."""
@@ -308,10 +191,10 @@ def _emit_other_row(x, kind, i, offsets, indices, R2, dim, period, periodic, nb)
 
 
 @njit(cache=True)
-def _fast_case(dim, periodic, kkind):
+def _fast_case(dim, periodic, kernel_code):
     """2 or 3: the pair loops run a version compiled for this dim, Wendland C2 and no
     periodic axis; 0: the generic version."""
-    if kkind == WENDLAND_C2 and not periodic and (dim == 2 or dim == 3):
+    if kernel_code == WENDLAND_C2 and not periodic and (dim == 2 or dim == 3):
         return dim
     return 0
 
@@ -386,7 +269,7 @@ def compact_rows(x, kind, offsets, indices, R, period, nb, cnt):
 
 
 @njit(cache=True, inline="always")
-def _dg_sums(x, rho, V, nb, o, c, i, R, fac2, kkind, dim, period, periodic):
+def _dg_sums(x, rho, V, nb, o, c, i, R, fac2, kernel_code, dim, period, periodic):
     """Moment matrix and un-normalised density gradient of row i over its compacted
     neighbours ``nb[o : o + c]`` (no branches in the loop: it vectorises)."""
     m00 = 0.0
@@ -404,7 +287,7 @@ def _dg_sums(x, rho, V, nb, o, c, i, R, fac2, kkind, dim, period, periodic):
         j = np.uint32(row[k])  # unsigned: no negative-index wraparound in the gathers
         r0, r1, r2 = _sep(x, i, j, dim, period, periodic)
         d2 = r0 * r0 + r1 * r1 + r2 * r2
-        s = V[j] * _F(np.sqrt(d2), R, fac2, kkind)  # V_j F
+        s = V[j] * _F(np.sqrt(d2), R, fac2, kernel_code)  # V_j F
         t = s * (rho[j] - ri)
         g0 += t * r0
         g1 += t * r1
@@ -419,7 +302,7 @@ def _dg_sums(x, rho, V, nb, o, c, i, R, fac2, kkind, dim, period, periodic):
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH, error_model="numpy")
-def density_gradient(x, rho, V, kind, offsets, indices, R, sigma, kkind, period, cond_max,
+def density_gradient(x, rho, V, kind, offsets, indices, R, sigma, kernel_code, period, cond_max,
                      grad, ok, nb, cnt):
     """Renormalised density gradient of every fluid particle (rows of others are zeroed).
 
@@ -438,7 +321,7 @@ def density_gradient(x, rho, V, kind, offsets, indices, R, sigma, kkind, period,
     periodic = False
     for k in range(dim):
         periodic |= period[k] > 0.0
-    fast = _fast_case(dim, periodic, kkind)
+    fast = _fast_case(dim, periodic, kernel_code)
     for b in prange(NBLOCKS):  # blocks of equal list length (balanced threads)
         lo, hi = _block(b, offsets)
         for i in range(lo, hi):
@@ -462,7 +345,7 @@ def density_gradient(x, rho, V, kind, offsets, indices, R, sigma, kkind, period,
                     x, rho, V, nb, o, c, i, R, fac2, WENDLAND_C2, 2, period, False)
             else:
                 m00, m01, m02, m11, m12, m22, g0, g1, g2 = _dg_sums(
-                    x, rho, V, nb, o, c, i, R, fac2, kkind, dim, period, periodic)
+                    x, rho, V, nb, o, c, i, R, fac2, kernel_code, dim, period, periodic)
             good, b00, b01, b02, b10, b11, b12, b20, b21, b22 = _invert_sym(
                 m00, m01, m02, m11, m12, m22, dim, cond_max)
             ok[i] = good
@@ -512,23 +395,11 @@ def pack_rows(x, v, vg, rho, pr, V, meff, isf, mu, grad, P):
 
 
 @njit(cache=True, inline="always")
-def _psep(P, i, j, period, periodic, dim=3):
-    r0 = P[j, 0] - P[i, 0]
-    r1 = P[j, 1] - P[i, 1] if dim > 1 else 0.0
-    r2 = P[j, 2] - P[i, 2] if dim > 2 else 0.0
-    if periodic:
-        r0 = min_image(r0, period[0])
-        r1 = min_image(r1, period[1])
-        r2 = min_image(r2, period[2])
-    return r0, r1, r2
-
-
-@njit(cache=True, inline="always")
-def _fluid_row_sums(P, i, row, R2, R, fac2, kkind, dim, pp, periodic, eps2, art_coef):
+def _fluid_row_sums(P, i, row, R2, R, fac2, kernel_code, dim, pp, periodic, eps2, art_coef):
     """Pair sums of fluid row i over ``row`` (its neighbour indices): acceleration (3),
     continuity and delta-SPH sums.  Pairs at r >= R or r = 0 and massless neighbours are
     skipped (none are left in a compacted row).  No loop-invariant branches (the caller
-    versions ``dim``, ``kkind``, ``periodic``; a zero ``art_coef`` adds exact zeros), so
+    versions ``dim``, ``kernel_code``, ``periodic``; a zero ``art_coef`` adds exact zeros), so
     LLVM vectorises the loop (gathers from the packed rows)."""
     a0 = 0.0
     a1 = 0.0
@@ -547,11 +418,11 @@ def _fluid_row_sums(P, i, row, R2, R, fac2, kkind, dim, pp, periodic, eps2, art_
     for k in range(row.shape[0]):
         j = np.uint32(row[k])  # unsigned: no negative-index wraparound in the gathers
         mj = P[j, _M]
-        r0, r1, r2 = _psep(P, i, j, pp, periodic, dim)
+        r0, r1, r2 = _sep(P, i, j, dim, pp, periodic)
         d2 = r0 * r0 + r1 * r1 + r2 * r2
         if d2 >= R2 or d2 == 0.0 or mj == 0.0:
             continue
-        F = _F(np.sqrt(d2), R, fac2, kkind)
+        F = _F(np.sqrt(d2), R, fac2, kernel_code)
         rj = P[j, _RHO]
         fj = P[j, _ISF]
         # pressure, eq. 2.85: -m_j (p_i/rho_i^2 + p_j/rho_j^2) grad_i W
@@ -587,7 +458,7 @@ def _fluid_row_sums(P, i, row, R2, R, fac2, kkind, dim, pp, periodic, eps2, art_
 
 
 @njit(cache=True, inline="always")
-def _wall_row_sums(P, i, row, R2, R, fac2, kkind, dim, pp, periodic, eps2, art_coef):
+def _wall_row_sums(P, i, row, R2, R, fac2, kernel_code, dim, pp, periodic, eps2, art_coef):
     """Pair sums of wall row i (the pair terms of :func:`_fluid_row_sums` with i and j
     swapped; rows hold fluid neighbours only, others are skipped): its acceleration."""
     a0 = 0.0
@@ -601,11 +472,11 @@ def _wall_row_sums(P, i, row, R2, R, fac2, kkind, dim, pp, periodic, eps2, art_c
     for k in range(row.shape[0]):
         j = np.uint32(row[k])
         mj = P[j, _M]
-        r0, r1, r2 = _psep(P, i, j, pp, periodic, dim)
+        r0, r1, r2 = _sep(P, i, j, dim, pp, periodic)
         d2 = r0 * r0 + r1 * r1 + r2 * r2
         if d2 >= R2 or d2 == 0.0 or P[j, _ISF] == 0.0:
             continue
-        F = _F(np.sqrt(d2), R, fac2, kkind)
+        F = _F(np.sqrt(d2), R, fac2, kernel_code)
         rs = ri + P[j, _RHO]
         mF = mj * F
         cp = -mF * (pri + P[j, _PR])
@@ -622,7 +493,7 @@ def _wall_row_sums(P, i, row, R2, R, fac2, kkind, dim, pp, periodic, eps2, art_c
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH, error_model="numpy")
-def fluid_forces(P, kind, offsets, cnt, indices, R, sigma, kkind, period, gravity, eps2,
+def fluid_forces(P, kind, offsets, cnt, indices, R, sigma, kernel_code, period, gravity, eps2,
                  delta_coef, art_coef, acc, drho, f_wall):
     """Accelerations and density rates of fluid particles; fluid forces on wall particles.
 
@@ -644,7 +515,7 @@ def fluid_forces(P, kind, offsets, cnt, indices, R, sigma, kkind, period, gravit
     for k in range(dim):
         periodic |= period[k] > 0.0
         pp[k] = period[k]
-    fast = _fast_case(dim, periodic, kkind)
+    fast = _fast_case(dim, periodic, kernel_code)
     use_delta = delta_coef != 0.0
     for b in prange(NBLOCKS):  # blocks of equal list length (balanced threads)
         lo, hi = _block(b, offsets)
@@ -666,7 +537,7 @@ def fluid_forces(P, kind, offsets, cnt, indices, R, sigma, kkind, period, gravit
                         P, i, row, R2, R, fac2, WENDLAND_C2, 2, pp, False, eps2, art_coef)
                 else:
                     a0, a1, a2, cont, diff = _fluid_row_sums(
-                        P, i, row, R2, R, fac2, kkind, 3, pp, periodic, eps2, art_coef)
+                        P, i, row, R2, R, fac2, kernel_code, 3, pp, periodic, eps2, art_coef)
                 acc[i, 0] = a0 + gravity[0]
                 if dim > 1:
                     acc[i, 1] = a1 + gravity[1]
@@ -684,7 +555,7 @@ def fluid_forces(P, kind, offsets, cnt, indices, R, sigma, kkind, period, gravit
                         P, i, row, R2, R, fac2, WENDLAND_C2, 2, pp, False, eps2, art_coef)
                 else:
                     a0, a1, a2 = _wall_row_sums(
-                        P, i, row, R2, R, fac2, kkind, 3, pp, periodic, eps2, art_coef)
+                        P, i, row, R2, R, fac2, kernel_code, 3, pp, periodic, eps2, art_coef)
                 mi = P[i, _M]
                 f_wall[i, 0] = mi * a0
                 if dim > 1:

@@ -26,48 +26,41 @@ import numpy as np
 from numba import njit
 
 from sphfem import kernels
-from sphfem.neighbors import build_neighbor_list, min_image
-from sphfem.operators import COND_MAX, FASTMATH, invert_small
+from sphfem.kernels import FASTMATH
+from sphfem.neighbors import build_neighbor_list
+from sphfem.operators import COND_MAX, renormalisation_matrix
+from sphfem.smallmat import pair_vector
 
 
 @njit(cache=True, fastmath=FASTMATH)
-def reference_pairs(X, vol, offsets, indices, R, sigma, kind, period, cond_max):
-    """Pair gradients gW (npairs, dim), pair kernel values W (npairs,), B0 (n, dim, dim) and
-    the correction mask ok (n,) on the reference positions X (n, dim)."""
+def _pair_kernels(X, offsets, indices, R, sigma, kernel_code, period):
+    """Pair gradients gW (npairs, dim) and kernel values W (npairs,) on positions X."""
     n, dim = X.shape
     npair = indices.shape[0]
     gw = np.zeros((npair, dim))
     w = np.zeros(npair)
-    B = np.zeros((n, dim, dim))
-    ok = np.zeros(n, dtype=np.bool_)
     r = np.empty(dim)
-    M = np.empty((dim, dim))
-    Bi = np.empty((dim, dim))
     for i in range(n):
-        M[:, :] = 0.0
         for jj in range(offsets[i], offsets[i + 1]):
             j = indices[jj]
-            d2 = 0.0
-            for k in range(dim):
-                r[k] = min_image(X[j, k] - X[i, k], period[k])
-                d2 += r[k] * r[k]
-            d = np.sqrt(d2)
+            d = pair_vector(X, i, j, period, r)
             if d == 0.0:
                 continue
-            w[jj] = sigma * kernels.kernel_f(d / R, kind)
-            s = -sigma * kernels.kernel_dfdq(d / R, kind) / (R * d)
+            w[jj] = sigma * kernels.kernel_f(d / R, kernel_code)
+            s = -sigma * kernels.kernel_dfdq(d / R, kernel_code) / (R * d)
             for k in range(dim):
                 gw[jj, k] = s * r[k]
-            for p in range(dim):
-                for q in range(dim):
-                    M[p, q] += vol[j] * r[p] * gw[jj, q]
-        cond = invert_small(M, Bi)
-        if cond <= cond_max:
-            ok[i] = True
-            B[i] = Bi
-        else:
-            for p in range(dim):
-                B[i, p, p] = 1.0
+    return gw, w
+
+
+def reference_pairs(X, vol, offsets, indices, R, sigma, kernel_code, period, cond_max):
+    """Pair gradients gW (npairs, dim), pair kernel values W (npairs,), B0 (n, dim, dim) and
+    the correction mask ok (n,) on the reference positions X (n, dim).  B0 and ok come from
+    the shared renormalisation kernel :func:`sphfem.operators.renormalisation_matrix`
+    (Park eq. 2.6, the same tensor as eq. 2.117)."""
+    gw, w = _pair_kernels(X, offsets, indices, R, sigma, kernel_code, period)
+    B, ok = renormalisation_matrix(X, vol, offsets, indices, R, sigma, kernel_code, period,
+                                   cond_max)
     return gw, w, B, ok
 
 
@@ -110,8 +103,8 @@ def build_reference(X, vol, R: float, kernel: str = "wendland_c2", period=None,
     n, dim = X.shape
     vol = np.ascontiguousarray(np.broadcast_to(np.asarray(vol, float), (n,)))
     period = np.zeros(dim) if period is None else np.asarray(period, float)
-    kind = kernels.kernel_code(kernel)
-    sigma = kernels.kernel_sigma(kind, dim, R)
+    code = kernels.kernel_code(kernel)
+    sigma = kernels.kernel_sigma(code, dim, R)
     lo = X.min(axis=0) - R
     hi = X.max(axis=0) + R
     if np.any(period > 0):
@@ -120,7 +113,7 @@ def build_reference(X, vol, R: float, kernel: str = "wendland_c2", period=None,
     nl = build_neighbor_list(X, R, lo, hi, period)
     offsets = np.ascontiguousarray(nl.offsets)
     indices = np.ascontiguousarray(nl.indices)
-    gw, w, B, ok = reference_pairs(X, vol, offsets, indices, R, sigma, kind, period,
+    gw, w, B, ok = reference_pairs(X, vol, offsets, indices, R, sigma, code, period,
                                    cond_max)
     ref = ReferenceConfig(X, vol, offsets, indices, gw, w, B, ok, float(R), period)
     # per-pair constants of the fused 2D force pass (sphfem.solid.forces.pair_forces_2d)
