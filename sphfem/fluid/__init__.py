@@ -3,6 +3,11 @@
 * :mod:`sphfem.fluid.eos` -- Tait equation of state and its inverse;
 * :mod:`sphfem.fluid.passes` -- fused numba passes (density gradient, forces);
 * :mod:`sphfem.fluid.walls_adami2012` -- wall pressure / velocity extrapolation;
+* :mod:`sphfem.fluid.surface_tension` -- registry of the surface-tension methods, one module
+  each (:mod:`~sphfem.fluid.surface_tension_csf`,
+  :mod:`~sphfem.fluid.surface_tension_iif_tartakovsky2005`,
+  :mod:`~sphfem.fluid.surface_tension_akinci2013`);
+* :mod:`sphfem.fluid.surface` -- colour gradient, free-surface detection, shifting;
 * :mod:`sphfem.fluid.guards` -- stability guards;
 * :mod:`sphfem.fluid.wcsph` -- :class:`FluidParams`, :class:`FluidSolver`, the ``fluid``
   physics module;
@@ -12,8 +17,10 @@
   :mod:`sphfem.fluid.packing_section`);
 * :mod:`sphfem.fluid.bench` -- the 3D dam-break throughput benchmark.
 
-Importing this package registers the module and its section by name only; the solver
-classes are imported (and numba loaded) on first attribute access.
+Importing this package registers the module and its section; the solver classes are
+imported on first attribute access.  The section's surface-tension keys come from the
+method modules, which declare them next to their numba kernels, so importing the package
+loads numba (nothing is compiled).
 """
 
 from dataclasses import replace as _replace
