@@ -46,6 +46,9 @@ AXES = "xyz"
 
 #: disk radius / dx for which a maximal Poisson-disk sample has mean density 1/dx^dim
 POISSON_RADIUS_FACTOR = {1: 0.687, 2: 0.778, 3: 0.835}
+#: bump when :func:`poisson_points` changes the points it makes for the same parameters
+#: (the cached samples carry it in their key)
+POISSON_VERSION = 1
 
 
 @dataclass(frozen=True)
@@ -242,9 +245,26 @@ def poisson_points(shape: Shape, dx: float, dim: int | None = None, seed=0, *,
     The count matches ``volume / dx^dim`` within ``tolerance`` (or ``1/sqrt(target)`` for
     very small blocks, where the count is noisy), the minimum distance is about
     ``0.7-0.8 dx`` and ``relax`` repulsion sweeps even the spacing out.  ``seed`` is an int
-    or a sequence of ints (``numpy.random.default_rng`` semantics).
+    or a sequence of ints (``numpy.random.default_rng`` semantics).  scipy's sampler is slow
+    (15-50 s for the main job's droplet), so samples are cached on disk
+    (:func:`sphfem.cache.cached_array`, key: every parameter and the library versions).
     """
     _check(shape, dx, dim)
+    import scipy
+
+    from sphfem.cache import cached_array
+
+    seed_key = np.asarray(seed).tolist() if not isinstance(seed, (int, np.integer)) else int(seed)
+    params = {"shape": [shape.kind, shape.dim, list(shape.lo), list(shape.hi),
+                        list(shape.center), shape.radius, shape.length, shape.axis],
+              "dx": dx, "seed": seed_key, "relax": relax, "tolerance": tolerance,
+              "version": POISSON_VERSION, "numpy": np.__version__, "scipy": scipy.__version__}
+    return cached_array("poisson", params,
+                        lambda: _poisson_points(shape, dx, seed, relax, tolerance))
+
+
+def _poisson_points(shape: Shape, dx: float, seed, relax: int, tolerance: float) -> np.ndarray:
+    """:func:`poisson_points` without the cache."""
     d = shape.dim
     target = shape.volume() / dx**d
     lo, hi = shape.bounds()

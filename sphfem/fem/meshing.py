@@ -41,8 +41,9 @@ FACES_2D = ("left", "right", "bottom", "top")
 
 def cache_dir() -> Path:
     """Folder of cached meshes: ``$SPHFEM_CACHE/meshes`` or ``~/.cache/sphfem/meshes``."""
-    root = os.environ.get("SPHFEM_CACHE") or os.path.join(Path.home(), ".cache", "sphfem")
-    return Path(root) / "meshes"
+    from sphfem.cache import cache_root
+
+    return cache_root() / "meshes"
 
 
 def _key(recipe: str, params: dict) -> str:
