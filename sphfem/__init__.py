@@ -16,7 +16,7 @@ _LAZY = {
     "FEMSubstrate": "sphfem.fem", "load_mesh": "sphfem.fem",
     "substrate_rect": "sphfem.fem", "substrate_block": "sphfem.fem",
     "TLSPHSubstrate": "sphfem.solid.backend",
-    "SceneError": "sphfem.schema", "OutputExistsError": "sphfem.output",
+    "SceneError": "sphfem.errors", "OutputExistsError": "sphfem.output",
 }
 
 

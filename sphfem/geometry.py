@@ -39,8 +39,8 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
+from sphfem.errors import SceneError
 from sphfem.particles import KIND_NAMES, ParticleSet
-from sphfem.schema import SceneError
 
 AXES = "xyz"
 

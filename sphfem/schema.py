@@ -48,6 +48,8 @@ from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
+from sphfem.errors import SceneError
+
 VECTOR = "vector"
 BOOLS = "bools"
 STRINGS = "strings"
@@ -65,23 +67,6 @@ class _Required:
 
 #: default of a parameter that must be given
 REQUIRED = _Required()
-
-
-class SceneError(ValueError):
-    """A mistake in a scene: ``str()`` is one line ``source: key: message``."""
-
-    def __init__(self, source: str, key: str, message: str):
-        self.source = str(source)
-        self.key = str(key).encode("unicode_escape").decode("ascii")  # always one line
-        self.message = " ".join(str(message).split())
-        super().__init__(str(self))
-
-    def __str__(self) -> str:
-        parts = [p for p in (self.source, self.key, self.message) if p]
-        return ": ".join(parts)
-
-    def __reduce__(self):
-        return (type(self), (self.source, self.key, self.message))
 
 
 # quantity names used in messages ("expected a positive length in m")
