@@ -8,17 +8,30 @@ modules declare the fields they need and never keep private per-particle arrays.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from enum import IntEnum
 
 import numpy as np
 from numba import njit
 
-# particle kinds (stored in the int8 field ``kind``)
-FLUID = 0
-WALL = 1  # boundary particles of a solid seen by a fluid (also the substrate's SPH particles)
-SOLID = 2  # particles of an SPH solid body (heat or TL-SPH)
-GHOST = 3  # boundary-condition ghosts (heat)
 
-KIND_NAMES = {"fluid": FLUID, "wall": WALL, "solid": SOLID, "ghost": GHOST}
+class ParticleKind(IntEnum):
+    """Particle kinds, the values of the int8 field ``kind`` (compare by name:
+    ``ps.kind != ParticleKind.GHOST``, never ``ps.kind != 3``)."""
+
+    FLUID = 0
+    WALL = 1  # boundary particles of a solid seen by a fluid (also the substrate's SPH particles)
+    SOLID = 2  # particles of an SPH solid body (heat or TL-SPH)
+    GHOST = 3  # boundary-condition ghosts (heat)
+
+
+# the same values as plain ints, for numba kernels (compile-time constants)
+FLUID = int(ParticleKind.FLUID)
+WALL = int(ParticleKind.WALL)
+SOLID = int(ParticleKind.SOLID)
+GHOST = int(ParticleKind.GHOST)
+
+#: scene name of a kind -> its value ("fluid" -> 0, ...)
+KIND_NAMES = {k.name.lower(): int(k) for k in ParticleKind}
 
 CORE_FIELDS = ("x", "m", "rho", "vol", "kind", "material", "id")
 
@@ -64,7 +77,7 @@ class ParticleSet:
     """Structure-of-arrays particle container.
 
     Core fields: ``x`` (n, dim) positions [m], ``m`` mass [kg], ``rho`` density [kg/m^3],
-    ``vol`` volume m/rho [m^3], ``kind`` (int8, see module constants), ``material`` (int32
+    ``vol`` volume m/rho [m^3], ``kind`` (int8, :class:`ParticleKind`), ``material`` (int32
     index into the scene's materials), ``id`` (int64, stable across reorders).
     Further fields are added by physics modules through :meth:`add_field`.
     """
