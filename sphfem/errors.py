@@ -1,11 +1,15 @@
-"""Exceptions shared by sphfem's layers; this module imports nothing of sphfem, so any
-module (geometry, the scene schema, physics packages) can raise them without importing
-the module that catches them.
+"""Exceptions shared by sphfem's layers: scene mistakes, stopped runs, refused outputs.
+
+This module imports nothing of sphfem, so any module (geometry, the scene schema, physics
+packages, the coupling) can raise them without importing the module that catches them (a
+physics module never imports the driver, :mod:`sphfem.simulation`).  The old homes
+re-export them: ``sphfem.schema.SceneError``, ``sphfem.simulation.SimulationStopped``,
+``sphfem.output.OutputExistsError``.
 """
 
 from __future__ import annotations
 
-__all__ = ["SceneError"]
+__all__ = ["OutputExistsError", "SceneError", "SimulationStopped"]
 
 
 class SceneError(ValueError):
@@ -23,3 +27,15 @@ class SceneError(ValueError):
 
     def __reduce__(self):
         return (type(self), (self.source, self.key, self.message))
+
+
+class SimulationStopped(Exception):
+    """A stability guard stopped the run (the last state was written before raising).
+
+    Physics modules raise it from ``step`` with a message naming the step, the time, what
+    tripped and the likely cause; the driver records it as status ``"stopped"``.
+    """
+
+
+class OutputExistsError(Exception):
+    """The output folder exists and ``--overwrite`` was not given."""

@@ -14,9 +14,7 @@ from pathlib import Path
 
 import numpy as np
 
-
-class OutputExistsError(Exception):
-    """The output folder exists and ``--overwrite`` was not given."""
+from sphfem.errors import OutputExistsError  # noqa: F401  (defined there; re-exported here)
 
 
 def file_mode() -> int:
