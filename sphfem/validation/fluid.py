@@ -38,6 +38,7 @@ from sphfem.fluid.setup import (
     lattice,
     make_particles,
 )
+from sphfem.particles import ParticleKind
 from sphfem.validation import CaseResult, Criterion, Run, Timer, register, relative_errors
 
 SUPPORT = 3.0
@@ -80,7 +81,7 @@ def run_poiseuille(n_across: int, t_over_tnu=(0.5,), L: float = 1e-3, nu: float 
     profiles = []
     for tt in np.atleast_1d(t_over_tnu):
         s.run(float(tt) * L**2 / nu)
-        fl = s.p.kind == 0
+        fl = s.p.kind == ParticleKind.FLUID
         profiles.append((s.t, s.p.x[fl, 1].copy(), s.p.v[fl, 0].copy()))
     return profiles, s
 
@@ -107,7 +108,8 @@ def poiseuille_case(quick: bool = False) -> CaseResult:
                          "startup_l2": s2, "startup_linf": sinf,
                          "startup_transient_over_umax": transient,
                          "err_vs_steady": relative_errors(u, steady)[0],
-                         "max_rho_dev": float(np.abs(s.p.rho[s.p.kind == 0] / 1000.0 - 1).max())}))
+                         "max_rho_dev": float(np.abs(s.p.rho[s.p.kind == ParticleKind.FLUID]
+                                                     / 1000.0 - 1).max())}))
     errs = [r.error_l2 for r in runs]
     ups = [r.extra["startup_l2"] for r in runs]
     criteria = {
@@ -166,7 +168,7 @@ def run_hydrostatic(n_high: int, t_end: float = 2.0, H: float = 1.0, g: float = 
 
     def sample(sv):
         if sv.t >= sample_from * (1 - 1e-9):
-            fl = sv.p.kind == 0
+            fl = sv.p.kind == ParticleKind.FLUID
             v2 = (sv.p.v[fl] ** 2).sum(axis=1)
             out["vmax"] = max(out["vmax"], float(np.sqrt(v2.max())))
             out["vrms"] = max(out["vrms"], float(np.sqrt(v2.mean())))
@@ -202,11 +204,11 @@ def hydrostatic_case(quick: bool = False) -> CaseResult:
         with Timer() as tm:
             s, vmax = run_hydrostatic(n, 2.0, H, g, rho0, stats=st)
         ps = s.p
-        fl = ps.kind == 0
+        fl = ps.kind == ParticleKind.FLUID
         # depth below the free surface, whose height follows from the mass per column
         p_ex = rho0 * g * (H - ps.x[fl, 1])
         e2, einf = relative_errors(ps.p[fl], p_ex)
-        wall = ps.kind == 1
+        wall = ps.kind == ParticleKind.WALL
         bottom = wall & (ps.x[:, 1] < 0) & (ps.x[:, 1] > -H / n) & (ps.x[:, 0] > 0.25 * H) \
             & (ps.x[:, 0] < 0.75 * H)
         p_bottom = float(ps.p[bottom].mean())
@@ -292,7 +294,7 @@ def run_dambreak(n_width: int, T_end: float = 3.2, a: float = 0.146, g: float = 
     T, Z = [0.0], [1.0]
 
     def sample(sv):
-        fl = sv.p.kind == 0
+        fl = sv.p.kind == ParticleKind.FLUID
         T.append(sv.t * scale)
         Z.append((float(sv.p.x[fl, 0].max()) + 0.5 * dx) / a)
 
