@@ -36,7 +36,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from coupling.sensors import SensorSet, Surface
-from sphfem.particles import FLUID
+from sphfem.particles import FLUID, GHOST
 from sphfem.physics import PhysicsModule
 
 if TYPE_CHECKING:
@@ -72,7 +72,7 @@ class HeatLedger:
     def __init__(self, ps, region: np.ndarray):
         self.e_region0 = self._energy(ps, region)
         self.e_fluid0 = self._energy(ps, ps.kind == FLUID)
-        self.e_other0 = self._energy(ps, ~region & (ps.kind != FLUID) & (ps.kind != 3))
+        self.e_other0 = self._energy(ps, ~region & (ps.kind != FLUID) & (ps.kind != GHOST))
 
     @staticmethod
     def _energy(ps, mask) -> float:
@@ -81,7 +81,7 @@ class HeatLedger:
     def figures(self, ps, region: np.ndarray) -> dict:
         q_s = self._energy(ps, region) - self.e_region0
         q_f = self.e_fluid0 - self._energy(ps, ps.kind == FLUID)
-        q_o = self._energy(ps, ~region & (ps.kind != FLUID) & (ps.kind != 3)) - self.e_other0
+        q_o = self._energy(ps, ~region & (ps.kind != FLUID) & (ps.kind != GHOST)) - self.e_other0
         scale = max(abs(q_s), abs(q_f), 1e-300)
         return {"heat_to_solid_J": q_s, "heat_lost_by_fluid_J": q_f,
                 "heat_to_other_particles_J": q_o,
