@@ -1,0 +1,408 @@
+"""Axisymmetric quasi-static linear thermo-elasticity in the (r, z) half-plane, r >= 0.
+
+A body of revolution under loads of revolution (a normal droplet impact) has displacements
+``u = u_r(r, z) e_r + u_z(r, z) e_z`` and four strains (Zienkiewicz & Taylor, *The Finite
+Element Method*, vol. 1, ch. "Axisymmetric stress analysis"; Timoshenko & Goodier,
+*Theory of Elasticity*, sec. 131)::
+
+    e_rr = du_r/dr,  e_zz = du_z/dz,  e_tt = u_r / r  (hoop),  e_rz = (du_r/dz + du_z/dr)/2
+
+    sigma = lam tr(e) I + 2 mu e - (3 lam + 2 mu) alpha (T - T0) I,  tr(e) = e_rr + e_zz + e_tt
+
+The weak form is written **per radian** (the 3D integrals divided by 2 pi)::
+
+    int [lam tr(e(u)) tr(e(v)) + 2 mu e(u) : e(v)] r dr dz
+        = int (3 lam + 2 mu) alpha dT tr(e(v)) r dr dz + int t . v r ds + int f . v r dr dz
+          + sum_p F_p . v(X_p) / (2 pi)
+
+so the stiffness ``K``, the load vector and the reactions at nodes are per radian.
+
+Point-force convention.  A point ``X_p = (r_p, z_p)`` of the half-plane is a ring of radius
+r_p.  ``point_forces`` take, by default (``force_convention="ring"``), the **total force of
+the ring** [N]: a ring load of f [N/m] along the circumference is the ring force
+F = 2 pi r_p f, and its axial component is the true net force on the body.  With
+``force_convention="radian"`` the forces are per radian [N/rad] = F / (2 pi).  Tractions
+[Pa] and body forces [N/m^3] are the 3D fields, without convention.  ``reaction`` returns
+ring totals (2 pi times the per-radian sums).
+
+Stress tensors are 3 x 3 in the order **(r, z, theta)**: ``S[0, 0] = sigma_rr``,
+``S[1, 1] = sigma_zz``, ``S[2, 2] = sigma_tt`` (hoop), ``S[0, 1] = S[1, 0] = sigma_rz``,
+the theta-shear components zero -- the layout of the plane-strain substrate with the
+out-of-plane axis third, so :func:`sphfem.fem.forms.von_mises` uses all four components.
+
+The axis is found geometrically (boundary facets with r = 0), named ``"axis"`` and carries
+``u_r = 0`` (symmetry).  Other edges take ``clamps`` and ``rollers`` ({group: "r" | "z" |
+"rz"}) by gmsh physical-group name, as :class:`sphfem.fem.FEMSubstrate`.  The only rigid
+motion left by the axis condition is a z translation; with nothing else holding z, one
+vertex is pinned in z (``pin_rigid``).  ``K`` is assembled and factorised once.
+
+>>> mesh = substrate_rz(radius=1e-3, depth=0.26e-3, h_fine=2e-6, h_coarse=50e-6)
+>>> sub = AxisymmetricFEMSubstrate(mesh, E=300e9, nu=0.21, alpha=7e-6, clamps=["bottom"])
+>>> res = sub.solve(tractions={"top": p_of_x}, dT_nodal=dT)
+>>> res.probe([[0.0, -1e-6]])["von_mises"], res.peak_von_mises()
+"""
+
+from __future__ import annotations
+
+import logging
+import os
+import time
+from pathlib import Path
+
+import numpy as np
+from skfem import Basis, BilinearForm, ElementVector, LinearForm, MeshQuad1, MeshTri1
+
+from sphfem.fem import forms
+from sphfem.fem.substrate import _ELEMENTS, FEMResult, FEMSubstrate, load_mesh
+from sphfem.progress import stage
+
+logger = logging.getLogger(__name__)
+
+__all__ = ["AxisymmetricFEMSubstrate", "AxisymmetricResult", "axisymmetric_elasticity",
+           "axisymmetric_thermal_load", "axisymmetric_traction_load",
+           "axisymmetric_body_force_load", "axisymmetric_stress", "substrate_rz",
+           "FORCE_CONVENTIONS"]
+
+TWO_PI = 2.0 * np.pi
+_COMPONENTS_RZ = {"r": 0, "z": 1}
+FORCE_CONVENTIONS = ("ring", "radian")
+
+
+# ----------------------------------------------------------------------------- forms
+def _strains(u, r):
+    """(e_rr, e_zz, e_tt, e_rz) of a vector DiscreteField ``u`` = (u_r, u_z) at radii r."""
+    g = u.grad
+    return g[0, 0], g[1, 1], u.value[0] / r, 0.5 * (g[0, 1] + g[1, 0])
+
+
+def axisymmetric_elasticity(lam: float, mu: float) -> BilinearForm:
+    """Per-radian stiffness ``int [lam tr e(u) tr e(v) + 2 mu e(u):e(v)] r dr dz`` with the
+    hoop strain e_tt = u_r / r (Zienkiewicz & Taylor vol. 1, axisymmetric B matrix)."""
+
+    @BilinearForm
+    def form(u, v, w):
+        r = w.x[0]
+        a = _strains(u, r)
+        b = _strains(v, r)
+        tra, trb = a[0] + a[1] + a[2], b[0] + b[1] + b[2]
+        eab = a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + 2.0 * a[3] * b[3]
+        return (lam * tra * trb + 2.0 * mu * eab) * r
+
+    return form
+
+
+def axisymmetric_thermal_load(lam: float, mu: float, alpha: float) -> LinearForm:
+    """``int (3 lam + 2 mu) alpha dT (e_rr + e_zz + e_tt)(v) r dr dz`` (per radian), dT at
+    quadrature points passed as ``.assemble(basis, dT=...)``."""
+    beta = forms.thermal_modulus(lam, mu) * alpha
+
+    @LinearForm
+    def form(v, w):
+        r = w.x[0]
+        return beta * w.dT * ((v.grad[0, 0] + v.grad[1, 1]) * r + v.value[0])
+
+    return form
+
+
+def _vector_field(spec, x):
+    if callable(spec):
+        return np.asarray(spec(x)) + 0.0 * x
+    s = np.asarray(spec, float)
+    return s.reshape((-1,) + (1,) * (x.ndim - 1)) + 0.0 * x
+
+
+def axisymmetric_traction_load(traction) -> LinearForm:
+    """``int t . v r ds`` (per radian) on a FacetBasis; ``traction`` a constant (t_r, t_z)
+    [Pa] or a callable ``t(x) -> (2, ...)`` of the (r, z) quadrature points."""
+
+    @LinearForm
+    def form(v, w):
+        t = _vector_field(traction, w.x)
+        return (t[0] * v.value[0] + t[1] * v.value[1]) * w.x[0]
+
+    return form
+
+
+def axisymmetric_body_force_load(force) -> LinearForm:
+    """``int f . v r dr dz`` (per radian); ``force`` constant (f_r, f_z) [N/m^3] or a
+    callable of x."""
+
+    @LinearForm
+    def form(v, w):
+        f = _vector_field(force, w.x)
+        return (f[0] * v.value[0] + f[1] * v.value[1]) * w.x[0]
+
+    return form
+
+
+def axisymmetric_stress(lam: float, mu: float, alpha: float, grad_u, u_r, r, dT,
+                        r_axis: float = 0.0):
+    """Cauchy stress (3, 3, ...) in the order (r, z, theta) from the displacement gradient
+    (2, 2, ...), u_r (...), the radius r (...) and dT (...).  On the axis (r <= r_axis) the
+    hoop strain u_r / r is its limit du_r/dr."""
+    g = np.asarray(grad_u)
+    r = np.asarray(r, float)
+    on_axis = r <= r_axis
+    ett = np.where(on_axis, g[0, 0], np.asarray(u_r) / np.where(on_axis, 1.0, r))
+    err, ezz, erz = g[0, 0], g[1, 1], 0.5 * (g[0, 1] + g[1, 0])
+    iso = lam * (err + ezz + ett) - forms.thermal_modulus(lam, mu) * alpha * np.asarray(dT)
+    S = np.zeros((3, 3) + np.broadcast(err, iso).shape)
+    S[0, 0] = iso + 2.0 * mu * err
+    S[1, 1] = iso + 2.0 * mu * ezz
+    S[2, 2] = iso + 2.0 * mu * ett
+    S[0, 1] = S[1, 0] = 2.0 * mu * erz
+    return S
+
+
+# ----------------------------------------------------------------------------- mesh
+def substrate_rz(path=None, radius=1e-3, depth=0.26e-3, h_fine=20e-6, h_coarse=150e-6,
+                 refine_radius=None, growth=1.3, order=1, element="tri", refine_center=None):
+    """Graded gmsh mesh of the (r, z) section [0, radius] x [-depth, 0] of a cylindrical
+    substrate, refined to ``h_fine`` within ``refine_radius`` (default 10 h_fine) of the
+    impact point (0, 0) (:func:`sphfem.fem.meshing.substrate_rect`, cached).  Groups:
+    "left" (the axis r = 0; the substrate adds the alias "axis"), "right" (r = radius),
+    "bottom", "top"."""
+    from sphfem.fem.meshing import substrate_rect
+
+    refine_radius = 10.0 * h_fine if refine_radius is None else refine_radius
+    center = (0.0, 0.0) if refine_center is None else tuple(refine_center)
+    return substrate_rect(path, size=(radius, depth), h_fine=h_fine, h_coarse=h_coarse,
+                          refine_center=center, refine_radius=refine_radius, order=order,
+                          element=element, origin=(0.0, -depth), growth=growth)
+
+
+def _rz_components(spec) -> list[int]:
+    """'r' | 'z' | 'rz' | 0 | [0, 1] -> sorted component indices of (u_r, u_z)."""
+    items = [spec] if isinstance(spec, (int, np.integer, str)) else list(spec)
+    out = []
+    for it in items:
+        if isinstance(it, str):
+            out += [_COMPONENTS_RZ.get(c, -1) for c in it.lower()]
+        else:
+            out.append(int(it))
+    if not out or any(c not in (0, 1) for c in out):
+        raise ValueError(f"roller components {spec!r}: use 'r', 'z' or 'rz' (or 0, 1)")
+    return sorted(set(out))
+
+
+# ----------------------------------------------------------------------------- result
+class AxisymmetricResult(FEMResult):
+    """One axisymmetric solve; the :class:`sphfem.fem.FEMResult` interface with the hoop
+    strain in every stress, r-weighted element averages and ring-total reactions."""
+
+    @property
+    def stress_qp(self) -> np.ndarray:
+        """Cauchy stress (3, 3, nelems, nqp) in the order (r, z, theta)."""
+        if "stress_qp" not in self.__dict__:
+            s = self.substrate
+            uh = s.basis.interpolate(self.dofs)
+            self.__dict__["stress_qp"] = axisymmetric_stress(
+                s.lam, s.mu, s.alpha, uh.grad, uh.value[0], s._r_qp,
+                s._dT_qp(self.dT_spec))
+        return self.__dict__["stress_qp"]
+
+    @property
+    def stress_elem(self) -> np.ndarray:
+        """Volume average (weight r dr dz) of the stress per element, (nelems, 3, 3)."""
+        w = self.substrate._rdx
+        S = (self.stress_qp * w).sum(axis=-1) / w.sum(axis=-1)
+        return np.moveaxis(S, -1, 0)
+
+    @property
+    def von_mises_elem(self) -> np.ndarray:
+        w = self.substrate._rdx
+        return (forms.von_mises(self.stress_qp) * w).sum(axis=-1) / w.sum(axis=-1)
+
+    def peak_von_mises(self) -> tuple[float, np.ndarray]:
+        """Largest nodal von Mises stress [Pa] and its vertex (r, z)."""
+        vm = self.von_mises_nodes
+        i = int(np.argmax(vm))
+        return float(vm[i]), self.substrate.mesh.p[:, i].copy()
+
+    def reaction(self, group: str) -> np.ndarray:
+        """Ring-total reaction (2,) [N] on the dofs of ``group``: 2 pi times the per-radian
+        nodal sums; the z component is the net axial force on the body."""
+        return TWO_PI * super().reaction(group)
+
+    def probe(self, points) -> dict:
+        """``u`` (n, 2), ``stress`` (n, 3, 3) in (r, z, theta) order, ``von_mises`` and
+        ``dT`` at points (n, 2) = (r, z) inside the mesh (stress from the displacement
+        gradient; on the axis e_tt = du_r/dr)."""
+        s = self.substrate
+        X = np.atleast_2d(np.asarray(points, float)).T
+        cells, pts = s._locate(X)
+        b = s.basis
+        n = X.shape[1]
+        u = np.zeros((2, n))
+        grad = np.zeros((2, 2, n))
+        for k in range(b.Nbfun):
+            phi = b.elem.gbasis(b.mapping, pts, k, tind=cells)[0]
+            coef = self.dofs[b.element_dofs[k, cells]]
+            u += np.asarray(phi)[..., 0] * coef
+            grad += phi.grad[..., 0] * coef
+        dT = s._dT_at(self.dT_spec, X)
+        S = axisymmetric_stress(s.lam, s.mu, s.alpha, grad, u[0], X[0], dT, s._r_axis)
+        return {"u": u.T, "stress": np.moveaxis(S, -1, 0), "von_mises": forms.von_mises(S),
+                "dT": dT}
+
+
+# ----------------------------------------------------------------------------- substrate
+class AxisymmetricFEMSubstrate(FEMSubstrate):
+    """Axisymmetric linear thermo-elastic quasi-static substrate in the (r, z) half-plane;
+    K (per radian) assembled and factorised once.
+
+    Parameters as :class:`sphfem.fem.FEMSubstrate`, except:
+
+    mesh : a 2D mesh (triangles or quadrilaterals; path or scikit-fem mesh) with x[0] = r
+        >= 0 and x[1] = z, e.g. :func:`substrate_rz`.
+    rollers : ``{group: "r" | "z" | "rz"}``.
+    force_convention : "ring" (point forces are ring totals [N], = 2 pi r f for a line load
+        f [N/m]) or "radian" (forces per radian [N/rad]).
+    intorder : quadrature order of the cells (default 2p + 1 for P_p: the r-weighted
+        gradient terms exactly, the rational hoop term u_r v_r / r to high order).
+    solver : "direct" only (a 2D problem; sparse Cholesky / LU, factorised once).
+    """
+
+    def __init__(self, mesh, E: float, nu: float, alpha: float, T0: float = 293.15,
+                 element: str = "P1", clamps=(), rollers=None, solver: str = "direct",
+                 pin_rigid: bool | None = None, force_convention: str = "ring",
+                 intorder: int | None = None, nthreads: int | None = None,
+                 direct_backend: str = "auto"):
+        t0 = time.perf_counter()
+        self.timings: dict[str, float] = {}
+        if isinstance(mesh, (str, os.PathLike)):
+            self.mesh_path = Path(mesh)
+            mesh = load_mesh(mesh)
+        else:
+            self.mesh_path = None
+        if not isinstance(mesh, (MeshTri1, MeshQuad1)):
+            raise ValueError(f"axisymmetric substrate: need a 2D (r, z) mesh of triangles or "
+                             f"quadrilaterals, got {type(mesh).__name__}")
+        if element not in ("P1", "P2"):
+            raise ValueError(f"element must be 'P1' or 'P2', got {element!r}")
+        if solver != "direct":
+            raise ValueError(f"axisymmetric substrate: solver must be 'direct', got {solver!r}")
+        if force_convention not in FORCE_CONVENTIONS:
+            raise ValueError(f"force_convention must be one of {FORCE_CONVENTIONS}, got "
+                             f"{force_convention!r}")
+        if not (E > 0 and -1 < nu < 0.5):
+            raise ValueError(f"need E > 0 and -1 < nu < 0.5, got E={E}, nu={nu}")
+        span = float(np.ptp(mesh.p, axis=1).max())
+        self._r_axis = 1e-12 * span
+        if mesh.p[0].min() < -self._r_axis:
+            raise ValueError(f"axisymmetric substrate: the mesh reaches r = "
+                             f"{mesh.p[0].min():.3g} < 0; x[0] is the radius (r >= 0)")
+        self.mesh = mesh = self._with_axis(mesh)
+        self.timings["load_mesh"] = time.perf_counter() - t0
+        self.E, self.nu, self.alpha, self.T0 = float(E), float(nu), float(alpha), float(T0)
+        self.lam, self.mu = forms.lame_parameters(self.E, self.nu)
+        self.element, self.solver, self.direct_backend = element, solver, direct_backend
+        self.force_convention = force_convention
+        self.dim = 2
+        self.n_factorizations = 0
+        self.n_solves = 0
+        self.cg_iterations: list[int] = []
+        p = int(element[1])
+        self.intorder = 2 * p + 1 if intorder is None else int(intorder)
+
+        escal = _ELEMENTS[(type(mesh), element)]()
+        self.basis = Basis(mesh, ElementVector(escal, dim=2), intorder=self.intorder)
+        self.sbasis = self.basis.with_element(escal)
+        self.vbasis = self.basis.with_element(_ELEMENTS[(type(mesh), "P1")]())
+        self.component_dofs = self.basis.split_indices()
+        self._facet_bases = {}
+        self._r_qp = self.basis.global_coordinates().value[0]  # (nelems, nqp)
+        self._rdx = self._r_qp * self.basis.dx  # r-weighted quadrature weights
+
+        # --- boundary conditions: the axis always carries u_r = 0 -------------------
+        clamps = [clamps] if isinstance(clamps, str) else list(clamps)
+        rollers = dict(rollers or {})
+        D = [self._group_dofs(g) for g in clamps]
+        holds_z = bool(clamps)
+        for g, comps in rollers.items():
+            d = self._group_dofs(g)
+            for c in _rz_components(comps):
+                D.append(np.intersect1d(d, self.component_dofs[c]))
+                holds_z |= c == 1
+        if "axis" in mesh.boundaries:
+            D.append(np.intersect1d(self._group_dofs("axis"), self.component_dofs[0]))
+        if pin_rigid is None:
+            pin_rigid = not holds_z
+        if pin_rigid:
+            D.append(self._rigid_pins())
+        self.D = np.unique(np.concatenate(D)).astype(np.int64) if D else np.zeros(0, np.int64)
+        self.I = np.setdiff1d(np.arange(self.basis.N), self.D)
+        self.clamps, self.rollers, self.pin_rigid = clamps, rollers, bool(pin_rigid)
+
+        # --- stiffness, once ------------------------------------------------------
+        t1 = time.perf_counter()
+        K = axisymmetric_elasticity(self.lam, self.mu)
+        if nthreads:
+            K = type(K)(K.form, nthreads=nthreads)
+        with stage(f"assembling axisymmetric K ({self.basis.N} dofs)"):
+            self.K = K.assemble(self.basis).tocsr()
+        self.timings["assemble_K"] = time.perf_counter() - t1
+        t2 = time.perf_counter()
+        with stage(f"factorising axisymmetric K ({len(self.I)} unknowns)"):
+            self._factorize()
+        self.timings["factorize"] = time.perf_counter() - t2
+        self._u_prev = None
+        self._mass = None
+        logger.info("AxisymmetricFEMSubstrate: %s %s, %d dofs (%d free); assembly %.2f s, "
+                    "factorisation %.2f s", type(mesh).__name__, element, self.basis.N,
+                    len(self.I), self.timings["assemble_K"], self.timings["factorize"])
+
+    # ------------------------------------------------------------------ set-up
+    def _with_axis(self, mesh):
+        """The mesh with its boundary facets on r = 0 named "axis" (none: no axis)."""
+        bf = mesh.boundary_facets()
+        on = np.all(mesh.p[0, mesh.facets[:, bf]] <= self._r_axis, axis=0)
+        bounds = dict(mesh.boundaries or {})
+        if on.any():
+            bounds["axis"] = bf[on]
+        elif "axis" in bounds:
+            raise ValueError("axisymmetric substrate: the mesh's group 'axis' is not on r = 0")
+        return mesh.with_boundaries(bounds) if bounds else mesh
+
+    def _rigid_pins(self) -> np.ndarray:
+        """The one rigid motion of an axisymmetric body, a z translation: pin u_z at the
+        vertex of least z (ties: least r), statically determinate."""
+        p = self.mesh.p
+        a = int(np.lexsort((p[0], p[1]))[0])
+        return np.asarray([self.basis.nodal_dofs[1, a]], dtype=np.int64)
+
+    @property
+    def cell_volume(self) -> np.ndarray:
+        """Volumes of the rings swept by the cells, 2 pi int r dr dz, (nelems,) [m^3]."""
+        return TWO_PI * self._rdx.sum(axis=-1)
+
+    # ------------------------------------------------------------------ loads
+    def thermal_load(self, dT) -> np.ndarray:
+        return axisymmetric_thermal_load(self.lam, self.mu, self.alpha).assemble(
+            self.basis, dT=self._dT_qp(dT))
+
+    def traction_load(self, tractions: dict) -> np.ndarray:
+        """``{group: t}`` with t = (t_r, t_z) constant or callable of x [Pa]: per-radian
+        nodal loads ``int t . v r ds``."""
+        f = self.basis.zeros()
+        for g, t in tractions.items():
+            f += axisymmetric_traction_load(t).assemble(self.facet_basis(g))
+        return f
+
+    def body_force_load(self, force) -> np.ndarray:
+        return axisymmetric_body_force_load(force).assemble(self.basis)
+
+    def point_force_load(self, points, forces, snap: str | None = "top") -> np.ndarray:
+        """Per-radian nodal loads of ring forces (n, 2) at points (n, 2) = (r, z):
+        f = P^T F / (2 pi) for ring totals (``force_convention="ring"``), P^T F for
+        forces per radian.  sum_nodes f_c = sum_points F_c / (2 pi) exactly."""
+        f = super().point_force_load(points, forces, snap=snap)
+        return f / TWO_PI if self.force_convention == "ring" else f
+
+    def solve(self, dT_nodal=None, tractions=None, point_forces=None, body_force=None,
+              T_nodal=None, snap: str | None = "top", load=None) -> AxisymmetricResult:
+        """As :meth:`sphfem.fem.FEMSubstrate.solve`; tractions (t_r, t_z), point forces per
+        ``force_convention``, ``load`` a ready per-radian nodal vector."""
+        r = super().solve(dT_nodal=dT_nodal, tractions=tractions, point_forces=point_forces,
+                          body_force=body_force, T_nodal=T_nodal, snap=snap, load=load)
+        return AxisymmetricResult(self, r.dofs, r.load, r.dT_spec, r.info)
