@@ -36,6 +36,7 @@ import math
 
 import numpy as np
 
+from sphfem.particles import ParticleKind
 from sphfem.validation import CaseResult, Criterion, Run, Timer, register
 
 SUPPORT = 3.0
@@ -141,7 +142,7 @@ def run_shear_transfer(n_across: int, t_over_tnu: float = 1.0, solves: int = 10,
         # steadiness: relative change of the mean shear over the last tenth of the run
         out[f"{name}_drift"] = (abs(h["mean_stress"]["xy"] - d.history[-2]["mean_stress"]["xy"])
                                 / tau if len(d.history) > 1 else None)
-    fl = ps.kind == 0
+    fl = ps.kind == ParticleKind.FLUID
     y, u = ps.x[fl, 1], ps.v[fl, 0]
     out["velocity_l2"] = float(np.linalg.norm(u - F_BODY / (2 * NU) * y * (H - y))
                                / np.linalg.norm(F_BODY / (2 * NU) * y * (H - y)))
