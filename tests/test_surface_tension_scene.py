@@ -24,6 +24,7 @@ import math
 import numpy as np
 import pytest
 
+from sphfem.particles import ParticleKind
 from sphfem.scene import load_scene
 from sphfem.simulation import Simulation
 
@@ -84,7 +85,7 @@ def _run(tmp_path, model):
 
 def _radial_momentum(sim):
     ps = sim.particles
-    fl = ps.kind == 0
+    fl = ps.kind == ParticleKind.FLUID
     r = ps.x[fl] - np.asarray(CENTER)
     e_r = r / np.linalg.norm(r, axis=1)[:, None]
     return float(np.sum(ps.m[fl] * np.einsum("ij,ij->i", ps.v[fl], e_r)))
