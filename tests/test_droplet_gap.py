@@ -24,6 +24,7 @@ import pytest
 
 import coupling  # noqa: F401  (registers the "coupling" module and its section)
 from sphfem.geometry import build_particles
+from sphfem.particles import ParticleKind
 from sphfem.scene import SceneError, load_scene, parse_scene_toml
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples" / "droplet_impact"
@@ -141,7 +142,7 @@ def test_droplet_scenes_start_clear_of_the_substrate(name):
     assert s.fluid.surface_tension == "csf" and s.materials[drop.material].sigma == 0.072
     if name == "droplet_impact.toml":  # the particles themselves (the others are larger)
         ps = build_particles(s)
-        fl = ps.kind == 0
+        fl = ps.kind == ParticleKind.FLUID
         from scipy.spatial import cKDTree
 
         d, _ = cKDTree(ps.x[~fl]).query(ps.x[fl])
@@ -155,7 +156,7 @@ def test_no_load_before_contact_and_contact_time(tmp_path, cache):
     t_end = 1.2 * gap / SPEED
     scene = parse_scene_toml(SCENE.format(gap=gap, speed=SPEED, t_end=t_end))
     ps0 = build_particles(scene)
-    fl = ps0.kind == 0
+    fl = ps0.kind == ParticleKind.FLUID
     u = np.array([0.0, -SPEED])
     t_pred = ballistic_contact_time(ps0.x[fl], ps0.x[~fl], u, R)
     assert 0.0 < t_pred < t_end
