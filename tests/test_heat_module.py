@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from sphfem.particles import ParticleKind
 from sphfem.physics import MODULES, PhysicsModule
 from sphfem.schema import register_module, unregister
 from sphfem.validation.heat import rod, rod_exact
@@ -53,7 +54,7 @@ def test_heat_rod_scene_runs(tmp_path):
     assert abs(d["energy_balance_residual_rel"]) < 1e-12
     assert d["explicit_stable_dt_s"] > 0 and 0.5 < d["explicit_dt_constant_C"] < 1.0
     ps = sim.particles
-    real = ps.kind != 3
+    real = ps.kind != ParticleKind.GHOST
     x = ps.x[real, 0]
     err = np.max(np.abs(ps.T[real] - 300.0 - rod_exact(x, 0.03)))
     assert err < 2e-3  # 80 particles, CN at 10x: measured 1.4e-4 order
@@ -120,7 +121,7 @@ def test_composite_bar_reaches_the_series_conduction_steady_state():
     sim = Simulation(parse_scene(_two_block_bar(10.0, "implicit", 1e4, t_end=200.0)))
     sim.run(Path(pytest.importorskip("tempfile").mkdtemp()), progress=False)
     p = sim.particles
-    real = p.kind != 3
+    real = p.kind != ParticleKind.GHOST
     x, T = p.x[real, 0], p.T[real]
     q = 100.0 / (0.5 / 1.0 + 0.5 / 0.1)
     exact = np.where(x < 0.5, 400.0 - q * x / 1.0, 400.0 - q * 0.5 - q * (x - 0.5) / 0.1)
