@@ -10,6 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from sphfem.particles import ParticleKind
 from sphfem.scene import parse_scene
 from sphfem.simulation import Simulation, SimulationStopped
 from sphfem.validation import stability as S
@@ -150,7 +151,7 @@ NanWriter = _nan_writer_class()
 def _outcome(**kw) -> S.Outcome:
     """A synthetic run outcome: 10 particles (8 fluid, 2 ghost) at rest, T in [300, 400]."""
     n = 10
-    kind = np.array([0] * 8 + [3] * 2)
+    kind = np.array([ParticleKind.FLUID] * 8 + [ParticleKind.GHOST] * 2)
     T = np.linspace(300.0, 400.0, n)
     state = {"x": np.zeros((n, 2)), "v": np.ones((n, 2)), "m": np.ones(n), "T": T,
              "kind": kind}
