@@ -31,30 +31,29 @@ import tomllib
 from dataclasses import dataclass, fields
 from pathlib import Path
 
+from sphfem.errors import SceneError
 from sphfem.kernels import KERNELS
 from sphfem.particles import KIND_NAMES
-from sphfem.schema import (
+from sphfem.schema.declarations import (
     BOOLS,
-    MODULES,
     REQUIRED,
-    SECTIONS,
     STRINGS,
     TEMPERATURE,
     VECTOR,
-    Context,
     FrozenDict,
     Param,
     Record,
-    SceneError,
     Section,
+    to_plain,
+)
+from sphfem.schema.registry import (
+    MODULE_SECTIONS,
+    SECTIONS,
     import_for,
-    key_text,
     known_modules,
     register_section,
-    suggest,
-    to_plain,
-    validate_section,
 )
+from sphfem.schema.validate import Context, key_text, suggest, validate_section
 
 __all__ = ["Scene", "SceneError", "load_scene", "parse_scene", "parse_scene_toml"]
 
@@ -334,7 +333,7 @@ def parse_scene(data, source: str = "<string>") -> Scene:
         data.get("physics"), dict) else []
     wanted = [m for m in (mods_raw if isinstance(mods_raw, list) else []) if isinstance(m, str)]
     for name in wanted + [str(k) for k in data if k not in SECTIONS]:
-        if name not in MODULES:
+        if name not in MODULE_SECTIONS:
             import_for(name)
 
     core = [s.name for s in CORE]
@@ -368,7 +367,7 @@ def parse_scene(data, source: str = "<string>") -> Scene:
             ctx.error(key, f"section [{key}] belongs to physics module {sec.module!r}, which is "
                            f"not listed in physics.modules; add it there or remove the section")
     for m in modules:
-        sec_name = MODULES.get(m)
+        sec_name = MODULE_SECTIONS.get(m)
         if sec_name is not None:
             sections[sec_name] = validate_section(SECTIONS[sec_name], data.get(sec_name), ctx)
 
