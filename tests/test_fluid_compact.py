@@ -89,7 +89,7 @@ def test_versioned_pair_loops_match_the_generic_loops(dim, delta, alpha):
         grad = np.zeros((p.n, dim))
         ok = np.zeros(p.n, dtype=np.bool_)
         passes.density_gradient(p.x, p.rho, sc.V, p.kind, nl.offsets, nl.indices, s.R,
-                                s.sigma, s.kkind, period, pa.cond_max, grad, ok, nb, cnt)
+                                s.sigma, s.kernel_code, period, pa.cond_max, grad, ok, nb, cnt)
         nb2 = np.zeros_like(nl.indices)
         cnt2 = np.zeros(p.n, dtype=np.int64)
         passes.compact_rows(p.x, p.kind, nl.offsets, nl.indices, s.R, period, nb2, cnt2)
@@ -100,7 +100,7 @@ def test_versioned_pair_loops_match_the_generic_loops(dim, delta, alpha):
         passes.pack_rows(p.x, p.v, sc.vg, p.rho, sc.pr, sc.V, sc.meff, sc.isf, p.mu, grad,
                          sc.P)
         acc, drho, fw = p.acc.copy(), p.drho.copy(), p.f_fluid.copy()
-        passes.fluid_forces(sc.P, p.kind, nl.offsets, cnt, nb, s.R, s.sigma, s.kkind,
+        passes.fluid_forces(sc.P, p.kind, nl.offsets, cnt, nb, s.R, s.sigma, s.kernel_code,
                             period, s.gravity, pa.eps_visc * s.h * s.h,
                             pa.delta * s.h * pa.c0, pa.alpha * s.h * pa.c0, acc, drho, fw)
         out[name] = (cnt.copy(), ok.copy(), grad, acc, drho, fw)

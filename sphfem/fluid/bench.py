@@ -145,13 +145,13 @@ def pass_profile(s: FluidSolver, repeats: int = 5) -> dict:
     kernels = {
         "prepare": prepare,
         "adami_wall_state": lambda: adami_wall_state(
-            p.x, p.v, p.rho, p.p, p.acc, p.kind, nl.offsets, nl.indices, s.R, s.kkind,
+            p.x, p.v, p.rho, p.p, p.acc, p.kind, nl.offsets, nl.indices, s.R, s.kernel_code,
             s.period, g, pa.rho0, s.B, pa.gamma, sc.vg),
         "density_gradient": lambda: passes.density_gradient(
-            p.x, p.rho, sc.V, p.kind, nl.offsets, nl.indices, s.R, s.sigma, s.kkind,
+            p.x, p.rho, sc.V, p.kind, nl.offsets, nl.indices, s.R, s.sigma, s.kernel_code,
             s.period, pa.cond_max, sc.grad, sc.ok, nb, cnt),
         "fluid_forces": lambda: passes.fluid_forces(
-            sc.P, p.kind, nl.offsets, cnt, nb, s.R, s.sigma, s.kkind, s.period, g,
+            sc.P, p.kind, nl.offsets, cnt, nb, s.R, s.sigma, s.kernel_code, s.period, g,
             pa.eps_visc * s.h * s.h, delta_coef, pa.alpha * s.h * pa.c0, p.acc, p.drho,
             p.f_fluid),
         "compact_rows": lambda: passes.compact_rows(p.x, p.kind, nl.offsets, nl.indices,

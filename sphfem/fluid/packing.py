@@ -65,7 +65,7 @@ class PackingReport:
 
 
 @njit(cache=True, parallel=True)
-def grad_gamma(x, vol, move, offsets, indices, R, sigma, kkind, period, out):
+def grad_gamma(x, vol, move, offsets, indices, R, sigma, kernel_code, period, out):
     """out_i = sum_j V_j grad_i W_ij for movable rows (``move[i]``), 0 elsewhere
     (V out_i = dE/dx_i of the packing energy E, see the module docstring)."""
     n, dim = x.shape
@@ -82,7 +82,7 @@ def grad_gamma(x, vol, move, offsets, indices, R, sigma, kkind, period, out):
             r = math.sqrt(d0 * d0 + d1 * d1 + d2 * d2)
             if r >= R or r == 0.0:
                 continue
-            f = vol[j] * sigma * kernel_dfdq(r / R, kkind) / (R * r)
+            f = vol[j] * sigma * kernel_dfdq(r / R, kernel_code) / (R * r)
             out[i, 0] += f * d0
             if dim > 1:
                 out[i, 1] += f * d1

@@ -32,11 +32,7 @@ from numba import njit, prange
 from sphfem.fluid.eos import tait_pressure
 from sphfem.kernels import FASTMATH, WENDLAND_C2, kernel_dfdq
 from sphfem.particles import FLUID, WALL
-
-# shared small kernels under the names the fluid modules import from here
-from sphfem.smallmat import invert3 as _invert  # noqa: F401  (sphfem.fluid.surface)
-from sphfem.smallmat import invert_sym3 as _invert_sym
-from sphfem.smallmat import pair_sep as _sep
+from sphfem.smallmat import invert_sym3, pair_sep
 
 #: iterations (blocks of rows) of the pair passes' parallel loops (see :func:`_block`)
 NBLOCKS = 64
@@ -93,7 +89,7 @@ def prepare_all(rho, p, m, vol, kind, pr, V, meff, isf):
 
 
 @njit(cache=True, inline="always")
-def _F(d, R, fac2, kernel_code):
+def grad_factor(d, R, fac2, kernel_code):
     """F = -dW/dr / d for the support radius R, ``fac2 = sigma / R^2``.
 
     Wendland C2: f'(q) = -20 q (1 - q)^3, so F = 20 sigma (1 - q)^3 / R^2 without a
@@ -183,7 +179,7 @@ def _emit_other_row(x, kind, i, offsets, indices, R2, dim, period, periodic, nb)
     o = offsets[i]
     for jj in range(o, offsets[i + 1]):
         j = indices[jj]
-        r0, r1, r2 = _sep(x, i, j, dim, period, periodic)
+        r0, r1, r2 = pair_sep(x, i, j, dim, period, periodic)
         d2 = r0 * r0 + r1 * r1 + r2 * r2
         nb[o + c] = j
         c += (kind[j] == FLUID) & ~((d2 >= R2) | (d2 == 0.0))
@@ -207,7 +203,7 @@ def _mark_row(x, i, src, dst, R2, dim, period, periodic):
     for k in range(src.shape[0]):
         jj = src[k]
         j = np.uint32(jj)  # unsigned: no negative-index wraparound
-        r0, r1, r2 = _sep(x, i, j, dim, period, periodic)
+        r0, r1, r2 = pair_sep(x, i, j, dim, period, periodic)
         d2 = r0 * r0 + r1 * r1 + r2 * r2
         dst[k] = -1 if (d2 >= R2) | (d2 == 0.0) else jj
 
@@ -285,9 +281,9 @@ def _dg_sums(x, rho, V, nb, o, c, i, R, fac2, kernel_code, dim, period, periodic
     row = nb[o:o + c]
     for k in range(c):
         j = np.uint32(row[k])  # unsigned: no negative-index wraparound in the gathers
-        r0, r1, r2 = _sep(x, i, j, dim, period, periodic)
+        r0, r1, r2 = pair_sep(x, i, j, dim, period, periodic)
         d2 = r0 * r0 + r1 * r1 + r2 * r2
-        s = V[j] * _F(np.sqrt(d2), R, fac2, kernel_code)  # V_j F
+        s = V[j] * grad_factor(np.sqrt(d2), R, fac2, kernel_code)  # V_j F
         t = s * (rho[j] - ri)
         g0 += t * r0
         g1 += t * r1
@@ -346,7 +342,7 @@ def density_gradient(x, rho, V, kind, offsets, indices, R, sigma, kernel_code, p
             else:
                 m00, m01, m02, m11, m12, m22, g0, g1, g2 = _dg_sums(
                     x, rho, V, nb, o, c, i, R, fac2, kernel_code, dim, period, periodic)
-            good, b00, b01, b02, b10, b11, b12, b20, b21, b22 = _invert_sym(
+            good, b00, b01, b02, b10, b11, b12, b20, b21, b22 = invert_sym3(
                 m00, m01, m02, m11, m12, m22, dim, cond_max)
             ok[i] = good
             if good:
@@ -418,11 +414,11 @@ def _fluid_row_sums(P, i, row, R2, R, fac2, kernel_code, dim, pp, periodic, eps2
     for k in range(row.shape[0]):
         j = np.uint32(row[k])  # unsigned: no negative-index wraparound in the gathers
         mj = P[j, _M]
-        r0, r1, r2 = _sep(P, i, j, dim, pp, periodic)
+        r0, r1, r2 = pair_sep(P, i, j, dim, pp, periodic)
         d2 = r0 * r0 + r1 * r1 + r2 * r2
         if d2 >= R2 or d2 == 0.0 or mj == 0.0:
             continue
-        F = _F(np.sqrt(d2), R, fac2, kernel_code)
+        F = grad_factor(np.sqrt(d2), R, fac2, kernel_code)
         rj = P[j, _RHO]
         fj = P[j, _ISF]
         # pressure, eq. 2.85: -m_j (p_i/rho_i^2 + p_j/rho_j^2) grad_i W
@@ -472,11 +468,11 @@ def _wall_row_sums(P, i, row, R2, R, fac2, kernel_code, dim, pp, periodic, eps2,
     for k in range(row.shape[0]):
         j = np.uint32(row[k])
         mj = P[j, _M]
-        r0, r1, r2 = _sep(P, i, j, dim, pp, periodic)
+        r0, r1, r2 = pair_sep(P, i, j, dim, pp, periodic)
         d2 = r0 * r0 + r1 * r1 + r2 * r2
         if d2 >= R2 or d2 == 0.0 or P[j, _ISF] == 0.0:
             continue
-        F = _F(np.sqrt(d2), R, fac2, kernel_code)
+        F = grad_factor(np.sqrt(d2), R, fac2, kernel_code)
         rs = ri + P[j, _RHO]
         mF = mj * F
         cp = -mF * (pri + P[j, _PR])

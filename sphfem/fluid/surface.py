@@ -31,12 +31,14 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from sphfem.fluid.passes import _F, FASTMATH, _invert, _sep
+from sphfem.fluid.passes import grad_factor
+from sphfem.kernels import FASTMATH
 from sphfem.particles import FLUID, WALL
+from sphfem.smallmat import invert3, pair_sep
 
 
 @njit(cache=True, inline="always", fastmath=FASTMATH)
-def color_gradient_row(i, x, V, kind, offsets, indices, R, fac2, kkind, period, periodic,
+def color_gradient_row(i, x, V, kind, offsets, indices, R, fac2, kernel_code, period, periodic,
                        only_fluid):
     """grad C_i = sum_j V_j grad_i W_ij over the fluid (``only_fluid``) or fluid and wall
     neighbours of row ``i``, as three components (the unused ones 0)."""
@@ -49,11 +51,11 @@ def color_gradient_row(i, x, V, kind, offsets, indices, R, fac2, kkind, period, 
         j = indices[jj]
         if kind[j] != FLUID and (only_fluid or kind[j] != WALL):
             continue
-        r0, r1, r2 = _sep(x, i, j, dim, period, periodic)
+        r0, r1, r2 = pair_sep(x, i, j, dim, period, periodic)
         d2 = r0 * r0 + r1 * r1 + r2 * r2
         if d2 >= R2 or d2 == 0.0:
             continue
-        t = V[j] * _F(np.sqrt(d2), R, fac2, kkind)
+        t = V[j] * grad_factor(np.sqrt(d2), R, fac2, kernel_code)
         g0 += t * r0
         g1 += t * r1
         g2 += t * r2
@@ -61,7 +63,7 @@ def color_gradient_row(i, x, V, kind, offsets, indices, R, fac2, kkind, period, 
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
-def color_gradient(x, V, kind, offsets, indices, R, sigma, kkind, period, only_fluid, gc):
+def color_gradient(x, V, kind, offsets, indices, R, sigma, kernel_code, period, only_fluid, gc):
     """grad C_i = sum_j V_j grad_i W_ij over fluid rows (``only_fluid``: fluid neighbours
     only, else fluid and wall neighbours); other rows are zeroed."""
     n, dim = x.shape
@@ -74,7 +76,7 @@ def color_gradient(x, V, kind, offsets, indices, R, sigma, kkind, period, only_f
         g1 = 0.0
         g2 = 0.0
         if kind[i] == FLUID:
-            g0, g1, g2 = color_gradient_row(i, x, V, kind, offsets, indices, R, fac2, kkind,
+            g0, g1, g2 = color_gradient_row(i, x, V, kind, offsets, indices, R, fac2, kernel_code,
                                             period, periodic, only_fluid)
         gc[i, 0] = g0
         if dim > 1:
@@ -84,7 +86,7 @@ def color_gradient(x, V, kind, offsets, indices, R, sigma, kkind, period, only_f
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
-def free_surface(x, V, kind, offsets, indices, R, sigma, kkind, period, cond_max, gc, nrm,
+def free_surface(x, V, kind, offsets, indices, R, sigma, kernel_code, period, cond_max, gc, nrm,
                  lam, flag):
     """Marrone et al. (2010) detection: ``lam`` (smallest eigenvalue of M), outward unit
     normal ``nrm``, colour gradient ``gc`` (fluid and wall neighbours) and ``flag``
@@ -109,11 +111,11 @@ def free_surface(x, V, kind, offsets, indices, R, sigma, kkind, period, cond_max
         g = np.zeros(3)
         for jj in range(offsets[i], offsets[i + 1]):
             j = indices[jj]
-            r0, r1, r2 = _sep(x, i, j, dim, period, periodic)
+            r0, r1, r2 = pair_sep(x, i, j, dim, period, periodic)
             d2 = r0 * r0 + r1 * r1 + r2 * r2
             if d2 >= R2 or d2 == 0.0:
                 continue
-            s = V[j] * _F(np.sqrt(d2), R, fac2, kkind)
+            s = V[j] * grad_factor(np.sqrt(d2), R, fac2, kernel_code)
             rr = (r0, r1, r2)
             for p in range(dim):
                 g[p] += s * rr[p]
@@ -133,7 +135,7 @@ def free_surface(x, V, kind, offsets, indices, R, sigma, kkind, period, cond_max
         lam[i] = lmin
         Bi = np.empty((3, 3))
         nv = np.zeros(3)
-        if _invert(M, dim, Bi, cond_max):
+        if invert3(M, dim, Bi, cond_max):
             for p in range(dim):
                 for q in range(dim):
                     nv[p] -= Bi[p, q] * g[q]
@@ -157,7 +159,7 @@ def free_surface(x, V, kind, offsets, indices, R, sigma, kkind, period, cond_max
         covered = False
         for jj in range(offsets[i], offsets[i + 1]):
             j = indices[jj]
-            r0, r1, r2 = _sep(x, i, j, dim, period, periodic)
+            r0, r1, r2 = pair_sep(x, i, j, dim, period, periodic)
             d2 = r0 * r0 + r1 * r1 + r2 * r2
             if d2 >= R2 or d2 == 0.0:
                 continue
@@ -194,7 +196,7 @@ def near_surface(kind, offsets, indices, flag, x, R, period, near):
             j = indices[jj]
             if flag[j] != 1:
                 continue
-            r0, r1, r2 = _sep(x, i, j, dim, period, periodic)
+            r0, r1, r2 = pair_sep(x, i, j, dim, period, periodic)
             if r0 * r0 + r1 * r1 + r2 * r2 < R2:
                 near[i] = True
                 break

@@ -32,11 +32,12 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from sphfem.fluid.passes import FASTMATH, _sep
 from sphfem.fluid.surface import color_gradient
 from sphfem.fluid.surface_tension import SurfaceTensionMethod, register
+from sphfem.kernels import FASTMATH
 from sphfem.particles import FLUID
 from sphfem.schema import Param
+from sphfem.smallmat import pair_sep
 
 
 def _akinci_c(q):
@@ -91,7 +92,7 @@ def akinci_accel(x, m, rho, kind, offsets, indices, R, gamma, rho0, m_bar, perio
             j = indices[jj]
             if kind[j] != FLUID:
                 continue
-            r0, r1, r2 = _sep(x, i, j, dim, period, periodic)
+            r0, r1, r2 = pair_sep(x, i, j, dim, period, periodic)
             d2 = r0 * r0 + r1 * r1 + r2 * r2
             if d2 >= R2 or d2 == 0.0:
                 continue
@@ -122,7 +123,7 @@ def _calibrate(pa, m_bar: float, R: float, dim: int):
 
 def _accelerate(solver, state):
     p, s, nl, R = solver.p, solver._scratch, solver.nbrs, solver.R
-    color_gradient(p.x, s.V, p.kind, nl.offsets, nl.indices, R, solver.sigma, solver.kkind,
+    color_gradient(p.x, s.V, p.kind, nl.offsets, nl.indices, R, solver.sigma, solver.kernel_code,
                    solver.period, True, s.nrm)
     s.nrm *= R
     akinci_accel(p.x, p.m, p.rho, p.kind, nl.offsets, nl.indices, R, solver.st_constant,

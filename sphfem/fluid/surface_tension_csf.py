@@ -70,11 +70,12 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
-from sphfem.fluid.passes import _F, FASTMATH, _sep
+from sphfem.fluid.passes import grad_factor
 from sphfem.fluid.surface import color_gradient_row
 from sphfem.fluid.surface_tension import SurfaceTensionMethod, register
-from sphfem.kernels import kernel_f
+from sphfem.kernels import FASTMATH, kernel_f
 from sphfem.particles import FLUID
+from sphfem.smallmat import pair_sep
 
 #: normal weight omega = smoothstep of |grad C| R from NORMAL_LO to NORMAL_HI (|grad C| R
 #: ~ 1.3 on the outer layer of a droplet, ~ 0.25 on the second, < 0.1 in the bulk)
@@ -90,7 +91,7 @@ DELTA_FACTOR = 2.0
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
-def csf_normals(x, V, kind, offsets, indices, R, sigma, kkind, period, a0, a1, g, omega):
+def csf_normals(x, V, kind, offsets, indices, R, sigma, kernel_code, period, a0, a1, g, omega):
     """Colour gradient ``g`` (fluid and wall neighbours) and the normal weight ``omega``
     (smoothstep of |g| R from ``a0`` to ``a1``) of every fluid particle; other rows are
     zeroed."""
@@ -104,7 +105,7 @@ def csf_normals(x, V, kind, offsets, indices, R, sigma, kkind, period, a0, a1, g
         g1 = 0.0
         g2 = 0.0
         if kind[i] == FLUID:
-            g0, g1, g2 = color_gradient_row(i, x, V, kind, offsets, indices, R, fac2, kkind,
+            g0, g1, g2 = color_gradient_row(i, x, V, kind, offsets, indices, R, fac2, kernel_code,
                                             period, periodic, False)
         g[i, 0] = g0
         if dim > 1:
@@ -122,7 +123,7 @@ def csf_normals(x, V, kind, offsets, indices, R, sigma, kkind, period, a0, a1, g
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
-def csf_curvature(x, V, kind, offsets, indices, R, sigma, kkind, period, den_min, g, omega,
+def csf_curvature(x, V, kind, offsets, indices, R, sigma, kernel_code, period, den_min, g, omega,
                   kappa):
     """Curvature ``kappa`` of the particles with valid normals (0 elsewhere), from the
     neighbours with valid normals (see the module docstring)."""
@@ -149,11 +150,11 @@ def csf_curvature(x, V, kind, offsets, indices, R, sigma, kkind, period, den_min
             j = indices[jj]
             if omega[j] == 0.0:
                 continue
-            r0, r1, r2 = _sep(x, i, j, dim, period, periodic)
+            r0, r1, r2 = pair_sep(x, i, j, dim, period, periodic)
             d2 = r0 * r0 + r1 * r1 + r2 * r2
             if d2 >= R2 or d2 == 0.0:
                 continue
-            t = omega[j] * V[j] * _F(np.sqrt(d2), R, fac2, kkind)
+            t = omega[j] * V[j] * grad_factor(np.sqrt(d2), R, fac2, kernel_code)
             gj0 = g[j, 0]
             gj1 = g[j, 1] if dim > 1 else 0.0
             gj2 = g[j, 2] if dim > 2 else 0.0
@@ -166,7 +167,7 @@ def csf_curvature(x, V, kind, offsets, indices, R, sigma, kkind, period, den_min
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
-def csf_force(x, V, rho, kind, offsets, indices, R, sigma, kkind, period, st_sigma,
+def csf_force(x, V, rho, kind, offsets, indices, R, sigma, kernel_code, period, st_sigma,
               delta_factor, shepard_min, g, omega, kappa, kbar, acc):
     """Curvature extended to the surface band, ``kbar`` (Shepard mean of ``kappa`` over
     the valid neighbours within R, self included; 0 without any), and
@@ -176,7 +177,7 @@ def csf_force(x, V, rho, kind, offsets, indices, R, sigma, kkind, period, st_sig
     periodic = False
     for k in range(dim):
         periodic |= period[k] > 0.0
-    w0 = sigma * kernel_f(0.0, kkind)
+    w0 = sigma * kernel_f(0.0, kernel_code)
     for i in prange(n):
         kbar[i] = 0.0
         if kind[i] != FLUID:
@@ -190,11 +191,11 @@ def csf_force(x, V, rho, kind, offsets, indices, R, sigma, kkind, period, st_sig
             j = indices[jj]
             if omega[j] == 0.0:
                 continue
-            r0, r1, r2 = _sep(x, i, j, dim, period, periodic)
+            r0, r1, r2 = pair_sep(x, i, j, dim, period, periodic)
             d2 = r0 * r0 + r1 * r1 + r2 * r2
             if d2 >= R2 or d2 == 0.0:
                 continue
-            w = omega[j] * V[j] * sigma * kernel_f(np.sqrt(d2) / R, kkind)
+            w = omega[j] * V[j] * sigma * kernel_f(np.sqrt(d2) / R, kernel_code)
             num += w * kappa[j]
             den += w
         if den <= 0.0:
@@ -221,14 +222,14 @@ class CSFState:
         self.kappa = np.zeros(n)
         self.kbar = np.zeros(n)
 
-    def accumulate(self, x, V, rho, kind, offsets, indices, R, sigma, kkind, period,
+    def accumulate(self, x, V, rho, kind, offsets, indices, R, sigma, kernel_code, period,
                    st_sigma, acc):
         """The three passes: normals, curvature, force (acc += CSF acceleration)."""
-        csf_normals(x, V, kind, offsets, indices, R, sigma, kkind, period, NORMAL_LO,
+        csf_normals(x, V, kind, offsets, indices, R, sigma, kernel_code, period, NORMAL_LO,
                     NORMAL_HI, self.g, self.omega)
-        csf_curvature(x, V, kind, offsets, indices, R, sigma, kkind, period, TANGENT_MIN,
+        csf_curvature(x, V, kind, offsets, indices, R, sigma, kernel_code, period, TANGENT_MIN,
                       self.g, self.omega, self.kappa)
-        csf_force(x, V, rho, kind, offsets, indices, R, sigma, kkind, period, st_sigma,
+        csf_force(x, V, rho, kind, offsets, indices, R, sigma, kernel_code, period, st_sigma,
                   DELTA_FACTOR, SHEPARD_MIN, self.g, self.omega, self.kappa, self.kbar, acc)
 
     @property
@@ -251,7 +252,7 @@ def _accelerate(solver, state):
     p, s, nl = solver.p, solver._scratch, solver.nbrs
     state = csf_state(state, p.n, solver.dim)
     state.accumulate(p.x, s.V, p.rho, p.kind, nl.offsets, nl.indices, solver.R, solver.sigma,
-                     solver.kkind, solver.period, solver.st_sigma, p.acc)
+                     solver.kernel_code, solver.period, solver.st_sigma, p.acc)
     return state
 
 

@@ -38,10 +38,11 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from sphfem.fluid.passes import FASTMATH, _sep
 from sphfem.fluid.surface_tension import SurfaceTensionMethod, register
+from sphfem.kernels import FASTMATH
 from sphfem.particles import FLUID
 from sphfem.schema import Param
+from sphfem.smallmat import pair_sep
 
 
 def _iif_integral(power: int) -> float:
@@ -86,7 +87,7 @@ def iif_accel(x, m, kind, offsets, indices, R, s, m_bar, period, acc):
             j = indices[jj]
             if kind[j] != FLUID:
                 continue
-            r0, r1, r2 = _sep(x, i, j, dim, period, periodic)
+            r0, r1, r2 = pair_sep(x, i, j, dim, period, periodic)
             d2 = r0 * r0 + r1 * r1 + r2 * r2
             if d2 >= R2 or d2 == 0.0:
                 continue

@@ -27,7 +27,7 @@ from sphfem.particles import FLUID, WALL
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
-def adami_wall_state(x, v, rho, p, acc, kind, offsets, indices, R, kkind, period,
+def adami_wall_state(x, v, rho, p, acc, kind, offsets, indices, R, kernel_code, period,
                      gravity, rho0, B, gamma, vg):
     """Extrapolate p, rho and the ghost velocity ``vg`` onto every WALL particle (in place).
 
@@ -57,7 +57,7 @@ def adami_wall_state(x, v, rho, p, acc, kind, offsets, indices, R, kkind, period
             d2 = r0 * r0 + r1 * r1 + r2 * r2
             if d2 >= R2:
                 continue
-            w = kernel_f(np.sqrt(d2) / R, kkind)
+            w = kernel_f(np.sqrt(d2) / R, kernel_code)
             sw += w
             sp += p[j] * w
             rw = rho[j] * w

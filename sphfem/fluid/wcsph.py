@@ -323,8 +323,8 @@ class FluidSolver:
         self.dim = particles.dim
         self.R = float(R)
         self.h = 0.5 * self.R
-        self.kkind = kernels.kernel_code(kernel)
-        self.sigma = kernels.kernel_sigma(self.kkind, self.dim, self.R)
+        self.kernel_code = kernels.kernel_code(kernel)
+        self.sigma = kernels.kernel_sigma(self.kernel_code, self.dim, self.R)
         self.lo = np.asarray(lo, dtype=np.float64)
         self.hi = np.asarray(hi, dtype=np.float64)
         self.period = np.zeros(self.dim) if period is None else np.asarray(period, np.float64)
@@ -479,13 +479,13 @@ class FluidSolver:
         g = self.body_force(self.t if t is None else t)
         passes.prepare_fluid(p.rho, p.m, p.v, p.kind, pa.rho0, self.B, pa.gamma, p.p, s.vg)
         adami_wall_state(p.x, p.v, p.rho, p.p, p.acc, p.kind, nl.offsets, nl.indices, self.R,
-                         self.kkind, self.period, g, pa.rho0, self.B, pa.gamma, s.vg)
+                         self.kernel_code, self.period, g, pa.rho0, self.B, pa.gamma, s.vg)
         passes.prepare_all(p.rho, p.p, p.m, p.vol, p.kind, s.pr, s.V, s.meff, s.isf)
         delta_coef = pa.delta * self.h * pa.c0
         nb, cnt = self._nb, s.cnt  # in-range rows (fluid-owned buffer, shared list untouched)
         if delta_coef > 0 or pa.shifting != "none":
             passes.density_gradient(p.x, p.rho, s.V, p.kind, nl.offsets, nl.indices, self.R,
-                                    self.sigma, self.kkind, self.period, pa.cond_max, s.grad,
+                                    self.sigma, self.kernel_code, self.period, pa.cond_max, s.grad,
                                     s.ok, nb, cnt)
             self.last_fallbacks = int(np.count_nonzero(~s.ok))
         else:
@@ -495,13 +495,13 @@ class FluidSolver:
             nb, cnt = nl.indices, np.diff(nl.offsets)
         passes.pack_rows(p.x, p.v, s.vg, p.rho, s.pr, s.V, s.meff, s.isf, p.mu, s.grad, s.P)
         passes.fluid_forces(s.P, p.kind, nl.offsets, cnt, nb, self.R, self.sigma,
-                            self.kkind, self.period, g, pa.eps_visc * self.h * self.h,
+                            self.kernel_code, self.period, g, pa.eps_visc * self.h * self.h,
                             delta_coef, pa.alpha * self.h * pa.c0, p.acc, p.drho, p.f_fluid)
         if self.st_method is not None:  # the registered method (sphfem.fluid.surface_tension)
             self._st_state = self.st_method.accelerate(self, self._st_state)
         if pa.uses_free_surface:
             surface.free_surface(p.x, s.V, p.kind, nl.offsets, nl.indices, self.R,
-                                 self.sigma, self.kkind, self.period, pa.cond_max, s.gc,
+                                 self.sigma, self.kernel_code, self.period, pa.cond_max, s.gc,
                                  s.nrm, s.lam, s.fs)
             surface.near_surface(p.kind, nl.offsets, nl.indices, s.fs, p.x, self.R,
                                  self.period, s.near)
