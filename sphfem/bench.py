@@ -28,10 +28,8 @@ Run ``python -m sphfem.bench NAME [--json FILE] [--quick]`` or ``sphfem bench NA
 from __future__ import annotations
 
 import argparse
-import datetime
 import json
 import os
-import platform
 import time
 
 import numba
@@ -40,6 +38,7 @@ from numba import njit, prange
 
 from sphfem.density import summation_density
 from sphfem.kernels import WENDLAND_C2, kernel_sigma
+from sphfem.machine import machine_info
 from sphfem.neighbors import build_neighbor_list, cell_sort_permutation
 
 BENCHES = ("neighbors", "density")
@@ -48,37 +47,6 @@ FLUID_BENCHES = ("dambreak2d", "droplet3d", "dambreak3d")
 #: every name ``run_bench`` / ``sphfem bench NAME`` accepts
 BENCHMARKS = BENCHES + FLUID_BENCHES
 QUICK_SIZES = (20_000,)
-
-
-def machine_info() -> dict:
-    """CPU model, core count, numba/numpy versions and the numba thread limit."""
-    cpu = platform.processor() or "unknown"
-    try:
-        with open("/proc/cpuinfo") as f:
-            for line in f:
-                if line.startswith("model name"):
-                    cpu = line.split(":", 1)[1].strip()
-                    break
-    except OSError:
-        pass
-    return {
-        "cpu": cpu,
-        "cores": os.cpu_count(),
-        "numba": numba.__version__,
-        "numpy": np.__version__,
-        "python": platform.python_version(),
-        "numba_max_threads": numba.config.NUMBA_NUM_THREADS,
-        "threading_layer": _threading_layer(),
-        "date": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
-        "load_average": list(os.getloadavg()) if hasattr(os, "getloadavg") else None,
-    }
-
-
-def _threading_layer() -> str:
-    try:
-        return numba.threading_layer()
-    except ValueError:  # no parallel function has run yet
-        return "not initialised"
 
 
 @njit(parallel=True, cache=True)

@@ -55,6 +55,7 @@ from sphfem.fluid.setup import (
 )
 from sphfem.fluid.walls_adami2012 import adami_wall_state
 from sphfem.fluid.wcsph import FluidParams, FluidSolver
+from sphfem.machine import machine_info
 from sphfem.particles import FLUID
 
 REBUILD_EVERY = 4
@@ -226,8 +227,6 @@ def run_fluid_bench(quick: bool = False, case: str = "dambreak3d", sizes=None,
                     threads=(1, 2), verbose: bool = True) -> dict:
     """Fluid-step throughput of ``case`` (:data:`CASES`) on 1 and 2 threads (2e4 fluid
     particles quick; 1e5 and more full)."""
-    from sphfem.bench import machine_info
-
     if case not in CASES:
         raise ValueError(f"unknown fluid benchmark {case!r}; expected one of {tuple(CASES)}")
     if sizes is None:
