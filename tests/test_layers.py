@@ -1,12 +1,14 @@
 """Package layers (issue 15, docs: DESIGN.md "Layers"): ``coupling`` depends on ``sphfem``,
 never the reverse, and every module of both packages imports on its own.
 
-Two checks:
+Three checks:
 
 * static -- no source file of ``sphfem`` names the ``coupling`` package for import: an
   ``import coupling...`` / ``from coupling... import`` statement anywhere (module level or
   inside a function), an ``importlib.import_module`` / ``find_spec`` / ``__import__`` of a
   ``coupling`` name, or a module-level constant listing it among package names;
+* static -- no import cycles among the modules of both packages, counting every import a
+  file makes (inside functions too: a deferred import only hides a cycle);
 * at run time -- each module is imported alone in a fresh child process (forked from one
   interpreter that holds only the third-party libraries), which must succeed; a ``sphfem``
   module must leave ``coupling`` out of ``sys.modules``.
@@ -151,3 +153,126 @@ def test_every_module_imports_alone_and_sphfem_leaves_coupling_out():
     pulled = [m for m in _modules(sphfem) if out[m]["coupling"]]
     assert pulled == [], f"importing these sphfem modules imports coupling: {pulled}"
     assert all(out[m]["coupling"] for m in _modules(coupling))  # the check can see it
+
+
+def _is_type_checking(test) -> bool:
+    return (getattr(test, "id", None) == "TYPE_CHECKING"
+            or getattr(test, "attr", None) == "TYPE_CHECKING")
+
+
+def imported_names(source: str, module: str, is_package: bool) -> set[str]:
+    """Absolute dotted names ``module`` imports anywhere in ``source``: ``import a.b``,
+    ``from a import b`` (as ``a.b``: the module ``a.b`` or a name in ``a``), relative
+    imports, and ``importlib.import_module`` of a constant; imports under ``if
+    TYPE_CHECKING:`` never run and are left out."""
+    here = module.split(".") if is_package else module.split(".")[:-1]
+    found: set[str] = set()
+
+    def visit(node):
+        if isinstance(node, ast.If) and _is_type_checking(node.test):
+            for child in node.orelse:
+                visit(child)
+            return
+        if isinstance(node, ast.Import):
+            found.update(a.name for a in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            base = here[:len(here) - node.level + 1] if node.level else []
+            full = ".".join(base + ([node.module] if node.module else []))
+            found.update(full if a.name == "*" else f"{full}.{a.name}" for a in node.names)
+        elif isinstance(node, ast.Call):
+            f = node.func
+            name = f.attr if isinstance(f, ast.Attribute) else getattr(f, "id", "")
+            if name == "import_module" and node.args and isinstance(
+                    node.args[0], ast.Constant) and isinstance(node.args[0].value, str):
+                found.add(node.args[0].value)
+        for child in ast.iter_child_nodes(node):
+            visit(child)
+
+    visit(ast.parse(source))
+    return found
+
+
+def import_graph(files: dict[str, tuple[str, bool]]) -> dict[str, set[str]]:
+    """Module -> the modules of ``files`` (name -> (source, is_package)) it imports.  A
+    dotted name counts as its longest prefix that is a module (``from a import f`` is an
+    edge to ``a``, ``from a import b`` to ``a.b`` when that is a module); the implicit import
+    of a module's parent packages is not an edge."""
+    def owner(name):
+        while name and name not in files:
+            name = name.rpartition(".")[0]
+        return name
+
+    graph = {}
+    for mod, (source, is_package) in files.items():
+        names = imported_names(source, mod, is_package)
+        graph[mod] = {owner(n) for n in names} - {"", mod}
+    return graph
+
+
+def import_cycles(graph: dict[str, set[str]]) -> list[list[str]]:
+    """The strongly connected components of more than one module (Tarjan), each sorted."""
+    index: dict[str, int] = {}
+    low: dict[str, int] = {}
+    stack: list[str] = []
+    on_stack: set[str] = set()
+    cycles = []
+
+    def connect(v):
+        index[v] = low[v] = len(index)
+        stack.append(v)
+        on_stack.add(v)
+        for w in sorted(graph.get(v, ())):
+            if w not in index:
+                connect(w)
+                low[v] = min(low[v], low[w])
+            elif w in on_stack:
+                low[v] = min(low[v], index[w])
+        if low[v] == index[v]:
+            comp = []
+            while True:
+                w = stack.pop()
+                on_stack.discard(w)
+                comp.append(w)
+                if w == v:
+                    break
+            if len(comp) > 1:
+                cycles.append(sorted(comp))
+
+    for v in sorted(graph):
+        if v not in index:
+            connect(v)
+    return sorted(cycles)
+
+
+def test_the_cycle_check_sees_deferred_relative_and_named_imports():
+    files = {
+        "p": ("from p import b\n", True),
+        "p.a": ("import os\ndef f():\n    from .b import g\n", False),
+        "p.b": ("from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n    import p.c\n"
+                "import importlib\nimportlib.import_module('p.c')\n", False),
+        "p.c": ("from p import a\n", False),
+        "p.d": ("if TYPE_CHECKING:\n    import p.a\nelse:\n    import p.e\n", False),
+        "p.e": ("from . import d\n", False),
+        "p.f": ("from p.a import f\n", False),
+    }
+    graph = import_graph(files)
+    assert graph == {"p": {"p.b"}, "p.a": {"p.b"}, "p.b": {"p.c"}, "p.c": {"p.a"},
+                     "p.d": {"p.e"}, "p.e": {"p.d"}, "p.f": {"p.a"}}, graph
+    assert import_cycles(graph) == [["p.a", "p.b", "p.c"], ["p.d", "p.e"]]
+
+
+def test_no_import_cycles():
+    files = {}
+    for pkg in (sphfem, coupling):
+        base = Path(pkg.__file__).resolve().parent
+        for path in base.rglob("*.py"):
+            parts = [pkg.__name__, *path.relative_to(base).with_suffix("").parts]
+            is_package = parts[-1] == "__init__"
+            files[".".join(parts[:-1] if is_package else parts)] = (
+                path.read_text(encoding="utf-8"), is_package)
+    graph = import_graph(files)
+    cycles = import_cycles(graph)
+    shown = ["; ".join(f"{m} -> {', '.join(sorted(graph[m] & set(c)))}" for m in c)
+             for c in cycles]
+    assert cycles == [], "import cycles (move the shared piece to a module both import):\n" \
+        + "\n".join(shown)
