@@ -72,7 +72,7 @@ FORCE_CONVENTIONS = ("ring", "radian")
 def _strains(u, r):
     """(e_rr, e_zz, e_tt, e_rz) of a vector DiscreteField ``u`` = (u_r, u_z) at radii r."""
     g = u.grad
-    return g[0, 0], g[1, 1], u.value[0] / r, 0.5 * (g[0, 1] + g[1, 0])
+    return g[0, 0], g[1, 1], u[0] / r, 0.5 * (g[0, 1] + g[1, 0])
 
 
 def axisymmetric_elasticity(lam: float, mu: float) -> BilinearForm:
@@ -99,7 +99,7 @@ def axisymmetric_thermal_load(lam: float, mu: float, alpha: float) -> LinearForm
     @LinearForm
     def form(v, w):
         r = w.x[0]
-        return beta * w.dT * ((v.grad[0, 0] + v.grad[1, 1]) * r + v.value[0])
+        return beta * w.dT * ((v.grad[0, 0] + v.grad[1, 1]) * r + v[0])
 
     return form
 
@@ -118,7 +118,7 @@ def axisymmetric_traction_load(traction) -> LinearForm:
     @LinearForm
     def form(v, w):
         t = _vector_field(traction, w.x)
-        return (t[0] * v.value[0] + t[1] * v.value[1]) * w.x[0]
+        return (t[0] * v[0] + t[1] * v[1]) * w.x[0]
 
     return form
 
@@ -130,7 +130,7 @@ def axisymmetric_body_force_load(force) -> LinearForm:
     @LinearForm
     def form(v, w):
         f = _vector_field(force, w.x)
-        return (f[0] * v.value[0] + f[1] * v.value[1]) * w.x[0]
+        return (f[0] * v[0] + f[1] * v[1]) * w.x[0]
 
     return form
 
@@ -197,20 +197,20 @@ class AxisymmetricResult(FEMResult):
             s = self.substrate
             uh = s.basis.interpolate(self.dofs)
             self.__dict__["stress_qp"] = axisymmetric_stress(
-                s.lam, s.mu, s.alpha, uh.grad, uh.value[0], s._r_qp,
+                s.lam, s.mu, s.alpha, uh.grad, uh[0], s.r_qp,
                 s._dT_qp(self.dT_spec))
         return self.__dict__["stress_qp"]
 
     @property
     def stress_elem(self) -> np.ndarray:
         """Volume average (weight r dr dz) of the stress per element, (nelems, 3, 3)."""
-        w = self.substrate._rdx
+        w = self.substrate.rdx
         S = (self.stress_qp * w).sum(axis=-1) / w.sum(axis=-1)
         return np.moveaxis(S, -1, 0)
 
     @property
     def von_mises_elem(self) -> np.ndarray:
-        w = self.substrate._rdx
+        w = self.substrate.rdx
         return (forms.von_mises(self.stress_qp) * w).sum(axis=-1) / w.sum(axis=-1)
 
     def peak_von_mises(self) -> tuple[float, np.ndarray]:
@@ -261,6 +261,9 @@ class AxisymmetricFEMSubstrate(FEMSubstrate):
     intorder : quadrature order of the cells (default 2p + 1 for P_p: the r-weighted
         gradient terms exactly, the rational hoop term u_r v_r / r to high order).
     solver : "direct" only (a 2D problem; sparse Cholesky / LU, factorised once).
+
+    Attributes ``r_qp`` (nelems, nqp): the radius at the quadrature points of ``basis``;
+    ``rdx``: the per-radian volume weights r dx there (for r-weighted norms and averages).
     """
 
     def __init__(self, mesh, E: float, nu: float, alpha: float, T0: float = 293.15,
@@ -311,8 +314,8 @@ class AxisymmetricFEMSubstrate(FEMSubstrate):
         self.vbasis = self.basis.with_element(_ELEMENTS[(type(mesh), "P1")]())
         self.component_dofs = self.basis.split_indices()
         self._facet_bases = {}
-        self._r_qp = self.basis.global_coordinates().value[0]  # (nelems, nqp)
-        self._rdx = self._r_qp * self.basis.dx  # r-weighted quadrature weights
+        self.r_qp = self.basis.global_coordinates()[0]  # (nelems, nqp)
+        self.rdx = self.r_qp * self.basis.dx  # r-weighted quadrature weights
 
         # --- boundary conditions: the axis always carries u_r = 0 -------------------
         clamps = [clamps] if isinstance(clamps, str) else list(clamps)
@@ -374,7 +377,7 @@ class AxisymmetricFEMSubstrate(FEMSubstrate):
     @property
     def cell_volume(self) -> np.ndarray:
         """Volumes of the rings swept by the cells, 2 pi int r dr dz, (nelems,) [m^3]."""
-        return TWO_PI * self._rdx.sum(axis=-1)
+        return TWO_PI * self.rdx.sum(axis=-1)
 
     # ------------------------------------------------------------------ loads
     def thermal_load(self, dT) -> np.ndarray:
