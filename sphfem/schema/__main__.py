@@ -5,4 +5,5 @@ import sys
 
 from sphfem.schema.docs import write_docs
 
-print(write_docs(sys.argv[1] if len(sys.argv) > 1 else None))
+if __name__ == "__main__":  # importing this module (the layer tests do) writes nothing
+    print(write_docs(sys.argv[1] if len(sys.argv) > 1 else None))
