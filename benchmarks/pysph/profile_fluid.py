@@ -69,17 +69,17 @@ def kernels_of(s, nl=None):
         "prepare_fluid": lambda: passes.prepare_fluid(p.rho, p.m, p.v, p.kind, pa.rho0, s.B,
                                                       pa.gamma, p.p, sc.vg),
         "adami_wall_state": lambda: adami_wall_state(
-            p.x, p.v, p.rho, p.p, p.acc, p.kind, nl.offsets, nl.indices, s.R, s.kkind,
+            p.x, p.v, p.rho, p.p, p.acc, p.kind, nl.offsets, nl.indices, s.R, s.kernel_code,
             s.period, g, pa.rho0, s.B, pa.gamma, sc.vg),
         "prepare_all": lambda: passes.prepare_all(p.rho, p.p, p.m, p.vol, p.kind, sc.pr,
                                                   sc.V, sc.meff, sc.isf),
         "density_gradient": lambda: passes.density_gradient(
-            p.x, p.rho, sc.V, p.kind, nl.offsets, nl.indices, s.R, s.sigma, s.kkind,
+            p.x, p.rho, sc.V, p.kind, nl.offsets, nl.indices, s.R, s.sigma, s.kernel_code,
             s.period, pa.cond_max, sc.grad, sc.ok, nb, cnt),
         "pack_rows": lambda: passes.pack_rows(p.x, p.v, sc.vg, p.rho, sc.pr, sc.V, sc.meff,
                                               sc.isf, p.mu, sc.grad, sc.P),
         "fluid_forces": lambda: passes.fluid_forces(
-            sc.P, p.kind, nl.offsets, cnt, nb, s.R, s.sigma, s.kkind, s.period, g,
+            sc.P, p.kind, nl.offsets, cnt, nb, s.R, s.sigma, s.kernel_code, s.period, g,
             pa.eps_visc * s.h * s.h, delta_coef, pa.alpha * s.h * pa.c0, p.acc, p.drho,
             p.f_fluid),
         "correct": lambda: W._correct(p.x, p.v, p.rho, p.acc, p.drho, p.kind, dt, sc.v_n,
