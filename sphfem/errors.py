@@ -9,7 +9,7 @@ re-export them: ``sphfem.schema.SceneError``, ``sphfem.simulation.SimulationStop
 
 from __future__ import annotations
 
-__all__ = ["OutputExistsError", "SceneError", "SimulationStopped"]
+__all__ = ["OutputExistsError", "OutputFolderError", "SceneError", "SimulationStopped"]
 
 
 class SceneError(ValueError):
@@ -39,3 +39,9 @@ class SimulationStopped(Exception):
 
 class OutputExistsError(Exception):
     """The output folder exists and ``--overwrite`` was not given."""
+
+
+class OutputFolderError(OSError):
+    """The output folder cannot be created (a parent is a file or not writable, or the
+    old contents cannot be removed); ``str()`` is one line ``folder: cannot create the
+    output folder: why``."""
