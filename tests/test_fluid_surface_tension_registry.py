@@ -85,4 +85,4 @@ def test_a_method_registered_from_outside_is_applied():
         assert s2.st_constant == 2.0
         assert s2.dt_limits()["capillary"] > 0
     finally:
-        surface_tension._METHODS.pop("toy", None)
+        surface_tension.REGISTRY.unregister("toy")

@@ -9,15 +9,17 @@ acceleration.  :class:`sphfem.fluid.wcsph.FluidSolver` looks the method up by na
 ``[fluid]`` declaration (:mod:`sphfem.fluid.scene_section`) takes the choices, the keys and
 their documentation from here.  ``"none"`` is no method (no entry).
 
-Adding a method: a new module ``surface_tension_<paper>.py`` that calls :func:`register`,
-and its name in :data:`METHOD_MODULES` (see docs/architecture.md, "Adding a method").
+Adding a method: a new module ``surface_tension_<paper>.py`` that calls :func:`register`
+(keeping the result as its ``METHOD``), and its name in :data:`METHOD_MODULES` (see
+docs/architecture.md, "Adding a method").
 """
 
 from __future__ import annotations
 
-import importlib
 from collections.abc import Callable
 from dataclasses import dataclass
+
+from sphfem.methods import MethodRegistry
 
 #: the method modules, in the order of the ``surface_tension`` choices (one line per method)
 METHOD_MODULES = (
@@ -49,46 +51,12 @@ class SurfaceTensionMethod:
     accelerate: Callable
 
 
-_METHODS: dict[str, SurfaceTensionMethod] = {}
-
-
-def register(method: SurfaceTensionMethod) -> SurfaceTensionMethod:
-    """Add ``method`` to the registry (called by each method module at import)."""
-    if method.name in _METHODS or method.name == "none":
-        raise ValueError(f"surface-tension method {method.name!r} registered twice")
-    _METHODS[method.name] = method
-    return method
-
-
-def methods() -> dict[str, SurfaceTensionMethod]:
-    """name -> method, in the order of :data:`METHOD_MODULES`."""
-    if len(_METHODS) < len(METHOD_MODULES):
-        for mod in METHOD_MODULES:
-            importlib.import_module(mod)
-    return _METHODS
-
-
-def names() -> tuple[str, ...]:
-    """The allowed values of ``surface_tension``: "none" and the registered methods."""
-    return ("none", *methods())
-
-
-def lookup(name: str) -> SurfaceTensionMethod | None:
-    """The method called ``name`` (None for "none"); ValueError for an unknown name."""
-    if name == "none":
-        return None
-    try:
-        return methods()[name]
-    except KeyError:
-        raise ValueError(f"unknown surface_tension model {name!r}") from None
-
-
-def scene_params() -> tuple:
-    """The ``[fluid]`` keys of all methods (each applies only to its own method)."""
-    return tuple(p for m in methods().values() for p in m.params)
-
-
-def choices_doc() -> str:
-    """Documentation of the ``surface_tension`` key, from the methods' descriptions."""
-    return "; ".join(["none: no surface tension",
-                      *(f"{m.name}: {m.doc}" for m in methods().values())])
+#: the registry (:class:`sphfem.methods.MethodRegistry`) of ``[fluid] surface_tension``
+REGISTRY = MethodRegistry("surface_tension", METHOD_MODULES, none_doc="no surface tension",
+                          family="surface-tension")
+register = REGISTRY.register
+methods = REGISTRY.methods
+names = REGISTRY.names
+lookup = REGISTRY.lookup
+scene_params = REGISTRY.scene_params
+choices_doc = REGISTRY.choices_doc
