@@ -1,0 +1,151 @@
+"""The numba warm-up child (``sphfem.jit_warmup``, issue 14: a first run after an install
+must not carry numba's compiler memory through the run).
+
+* the coarsened copy of a scene scales every resolution length and nothing else;
+* the manifest's kernel key ignores values that do not change compiled code;
+* the cache check counts only index entries numba would load now: it turns cold when the
+  kernel's source changes (a tiny kernel in a temporary module, own ``NUMBA_CACHE_DIR``);
+* end to end (slow): with an empty cache, ``sphfem run`` compiles in the child and the run
+  itself compiles nothing; a second run finds the cache warm and starts no child.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import subprocess
+import sys
+import textwrap
+from pathlib import Path
+
+import pytest
+
+from sphfem.jit_warmup import coarsened, kernel_key
+from sphfem.scene import load_scene, parse_scene
+
+ROOT = Path(__file__).resolve().parent.parent
+DROPLET = ROOT / "examples" / "droplet_impact" / "droplet_impact.toml"
+
+
+def test_coarsened_scales_resolution_lengths_only():
+    sc = load_scene(DROPLET)
+    d = coarsened(sc, coarsen=3.0, steps=7)
+    c = parse_scene(d)  # a valid scene
+    assert c.sph.dx == pytest.approx(3.0 * sc.sph.dx, rel=1e-15)
+    m0, m1 = sc.coupling.mesh, c.coupling.mesh
+    assert m1.h_fine == pytest.approx(3.0 * m0.h_fine, rel=1e-15)
+    assert m1.h_coarse == pytest.approx(3.0 * m0.h_coarse, rel=1e-15)
+    # lengths that are geometry, not resolution, stay
+    assert m1.refine_radius == m0.refine_radius and m1.lo == m0.lo and m1.hi == m0.hi
+    assert [b.gap for b in c.blocks] == [None if b.gap is None else 3.0 * b.gap
+                                         for b in sc.blocks]  # gap >= R stays true
+    assert c.blocks[1].gap >= c.support_radius * (1 - 1e-12)
+    same = [{k: v for k, v in b.to_dict().items() if k not in ("gap", "center")}
+            for b in (*sc.blocks, *c.blocks)]
+    assert same[:2] == same[2:]
+    assert c.time.max_steps == 7 and c.time.t_end == sc.time.t_end
+    assert kernel_key(c) == kernel_key(sc)  # the child compiles what the scene calls
+
+
+def test_kernel_key_ignores_values_but_not_choices():
+    base = load_scene(DROPLET).to_dict()
+
+    def key(change):
+        d = json.loads(json.dumps(base))
+        change(d)
+        return kernel_key(parse_scene(d))
+
+    k0 = key(lambda d: None)
+    assert key(lambda d: d["blocks"][1].update(velocity=[0.0, 0.0, -30.0])) == k0
+    assert key(lambda d: d["fluid"].update(alpha=0.05)) == k0
+    assert key(lambda d: d["fluid"].update(alpha=0.0)) != k0  # a term switched off
+    assert key(lambda d: d["fluid"].update(surface_tension="none")) != k0
+    assert key(lambda d: d["heat"].update(laplacian="fatehi_manzari")) != k0
+
+
+_PROBE = textwrap.dedent("""
+    import json, sys
+    sys.path.insert(0, sys.argv[1])
+    import tinykern
+    from sphfem.jit_warmup import _valid_entries, used_kernels
+    if sys.argv[2] == "call":
+        tinykern.twice(1.5)
+    print(json.dumps({"valid": _valid_entries(tinykern.twice),
+                      "used": used_kernels().get("tinykern:twice")}))
+""")
+
+
+def _probe(tmp_path, mode):
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba")}
+    r = subprocess.run([sys.executable, "-c", _PROBE, str(tmp_path / "mod"), mode],
+                       capture_output=True, text=True, env=env, check=True)
+    return json.loads(r.stdout.strip().splitlines()[-1])
+
+
+def test_cache_check_follows_numbas_validity(tmp_path):
+    mod = tmp_path / "mod"
+    mod.mkdir()
+    src = mod / "tinykern.py"
+    src.write_text("from numba import njit\n\n@njit(cache=True)\ndef twice(x):\n"
+                   "    return 2.0 * x\n")
+    assert _probe(tmp_path, "look") == {"valid": 0, "used": None}  # cold
+    assert _probe(tmp_path, "call") == {"valid": 1, "used": 1}  # compiled and cached
+    assert _probe(tmp_path, "look") == {"valid": 1, "used": None}  # warm, not called
+    src.write_text(src.read_text().replace("2.0 * x", "3.0 * x"))  # edited source
+    assert _probe(tmp_path, "look")["valid"] == 0
+
+
+_SCENE = """
+[scene]
+name = "tiny_heat"
+dim = 2
+[domain]
+lo = [-0.1, -0.1]
+hi = [1.1, 0.6]
+[sph]
+dx = 0.05
+support_factor = 3.0
+[materials.m]
+rho0 = 1.0
+c = 1.0
+k = 1.0
+[[blocks]]
+name = "plate"
+shape = "box"
+kind = "solid"
+material = "m"
+lo = [0.0, 0.0]
+hi = [1.0, 0.5]
+temperature = 300.0
+[physics]
+modules = ["heat"]
+[time]
+t_end = 1.0e-3
+[output]
+every = 5.0e-4
+"""
+
+
+@pytest.mark.slow
+def test_first_run_compiles_in_the_child_only(tmp_path):
+    """Cold cache: the warm-up child compiles, the run compiles nothing; then warm: no
+    child.  (Minutes: numba compiles the neighbour and heat kernels from scratch.)"""
+    scene = tmp_path / "tiny.toml"
+    scene.write_text(_SCENE)
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba"),
+           "SPHFEM_CACHE": str(tmp_path / "cache"), "NUMBA_NUM_THREADS": "1"}
+    env.pop("SPHFEM_JIT_WARMUP", None)
+
+    def run(out):
+        r = subprocess.run([sys.executable, "-m", "sphfem.cli", "run", str(scene), "--out",
+                            str(tmp_path / out)], capture_output=True, text=True, env=env)
+        assert r.returncode == 0, r.stderr
+        return r.stderr, json.loads((tmp_path / out / "summary.json").read_text())
+
+    err, s = run("cold")
+    assert "compiling numba kernels in a child process" in err
+    assert s["setup"]["numba_compilations"] == 0, s["setup"]["numba_compiled"]
+    assert list((tmp_path / "cache" / "jit").glob("*.json"))
+    err, s = run("warm")
+    assert "child process" not in err
+    assert s["setup"]["numba_compilations"] == 0
