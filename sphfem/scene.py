@@ -14,12 +14,14 @@ Attribute layout of a :class:`Scene`::
     scene.source, scene.name, scene.dim, scene.description, scene.seed
     scene.domain.lo / .hi (tuples, m) / .periodic (tuple of bool)
     scene.sph.kernel / .dx / .support_factor;  scene.support_radius (= support_factor * dx)
-    scene.materials["water"].rho0 / .c / .k / .mu / .c0 / .sigma / .E / .nu / .alpha
+    scene.materials["water"].rho0 / .c / .k / .mu / .c0 (m/s; "physical" resolved to
+                             .sound_speed) / .sound_speed / .sigma / .E / .nu / .alpha
     scene.blocks[i].name / .shape / .kind / .material / .sampling / .velocity /
                    .temperature (K) / .dx (None = sph.dx) / .above / .gap and, by shape,
                    .lo .hi (box) | .center .radius (sphere) | .center .radius .length .axis
     scene.physics.modules (tuple of str)
-    scene.time.t_end / .dt (None) / .cfl / .max_steps (None)
+    scene.time.t_end / .dt (None) / .cfl / .max_steps (None) / .tc_block (None); times
+                   given as "<x> tc" are in seconds here (sphfem.time_units)
     scene.output.every (None) / .format / .fields (None)
     scene.heat, scene.fluid, ... : the section of each listed module (None if not listed)
 """
@@ -54,6 +56,8 @@ from sphfem.schema.registry import (
     register_section,
 )
 from sphfem.schema.validate import Context, key_text, suggest, validate_section
+from sphfem.sound_speed import C0, SOUND_SPEED, resolve_sound_speeds
+from sphfem.time_units import TC_BLOCK, check_time, resolve_times, time_param
 
 __all__ = ["Scene", "SceneError", "load_scene", "parse_scene", "parse_scene_toml"]
 
@@ -84,11 +88,6 @@ def _check_block(rec, ctx, path):
     if rec.shape == "cylinder" and AXES.index(rec.axis) >= ctx.dim:
         ctx.error(f"{path}.axis", f"axis {rec.axis!r} does not exist in {ctx.dim}D; expected "
                                   + " or ".join(repr(a) for a in AXES[: ctx.dim]))
-
-
-def _check_time(rec, ctx, path):
-    if rec.dt is not None and rec.dt > rec.t_end:
-        ctx.error(f"{path}.dt", f"fixed time step {rec.dt:g} s exceeds t_end = {rec.t_end:g} s")
 
 
 SCENE = Section("scene", (
@@ -128,8 +127,8 @@ MATERIALS = Section("materials", (
     Param("c", float, unit="J/(kg K)", doc="specific heat capacity", **_POSITIVE_OPT),
     Param("k", float, unit="W/(m K)", doc="thermal conductivity", **_POSITIVE_OPT),
     Param("mu", float, unit="Pa s", doc="dynamic viscosity", **_POSITIVE_OPT),
-    Param("c0", float, unit="m/s", quantity="speed of sound",
-          doc="artificial speed of sound (weakly compressible fluid)", **_POSITIVE_OPT),
+    C0,  # a number or "physical" (sphfem.sound_speed)
+    SOUND_SPEED,
     Param("sigma", float, unit="N/m",
           doc="physical surface tension coefficient (not a force-model calibration constant)",
           **_POSITIVE_OPT),
@@ -189,19 +188,22 @@ PHYSICS = Section("physics", (
 ), doc="The physics this scene needs (see the registered modules below).")
 
 TIME = Section("time", (
-    Param("t_end", float, REQUIRED, unit="s", positive=True, doc="end time"),
-    Param("dt", float, None, unit="s", positive=True, quantity="time step",
-          doc="fixed time step (capped by the stable limits unless `cap_dt = false`)"),
+    time_param("t_end", REQUIRED, 'end time, counted from t = 0: seconds, or a multiple '
+               'of the impact time tc = D / |v| of the moving fluid sphere, e.g. "4 tc" '
+               '(sphfem.time_units)'),
+    time_param("dt", None, "fixed time step (capped by the stable limits unless "
+               "`cap_dt = false`)", "time step"),
     Param("cap_dt", bool, True,
           doc="cap a fixed `dt` at the modules' stable limits; `false` uses `dt` as given "
               "(for stability studies: the guards then stop an unstable run)"),
     Param("cfl", float, 0.25, gt=0.0, le=1.0, doc="Courant number of the stable time step"),
     Param("max_steps", int, None, ge=1, doc="stop after this many steps"),
-), doc="Time stepping.", required=True, check=_check_time)
+    TC_BLOCK,
+), doc="Time stepping.", required=True, check=check_time)
 
 OUTPUT = Section("output", (
-    Param("every", float, None, unit="s", positive=True, quantity="interval",
-          doc="simulated time between particle outputs (default: first and last state)"),
+    time_param("every", None, 'simulated time between particle outputs (seconds or '
+               '"0.25 tc"; default: first and last state)', "interval"),
     Param("format", str, "vtu", choices=("vtu",), doc="particle file format (VTU + PVD)"),
     Param("fields", STRINGS, None, doc="particle fields to write (default: all)"),
 ), doc="Result files.")
@@ -357,7 +359,9 @@ def parse_scene(data, source: str = "<string>") -> Scene:
                       + (hint if hint.startswith("; did") else "") + f" (registered: {reg})")
         if m in modules[:i]:
             ctx.error(f"physics.modules[{i}]", f"module {m!r} is listed twice")
+    rec["materials"] = resolve_sound_speeds(rec["materials"], ctx)  # c0 = "physical"
     blocks = _resolve_blocks(rec["blocks"], rec["materials"], rec["domain"], rec["sph"], ctx)
+    rec.update(resolve_times(rec, blocks, ctx))  # times in tc = D / |v|
     # module sections' check(rec, ctx, path) may cross-reference the core: ctx.core["blocks"]
     ctx.core = {"scene": meta, **rec, "blocks": blocks}
     sections = {}
