@@ -1,15 +1,25 @@
 """The ``[fluid]`` scene section (declared once: validation, defaults and docs/scenes.md).
 
-Pure declarations: importing this module compiles nothing (the surface-tension methods'
-keys and choices come from the registry :mod:`sphfem.fluid.surface_tension`).  Material
+Pure declarations: importing this module compiles nothing (the method keys ``pressure``,
+``viscosity``, ``surface_tension``, ``walls`` and ``integrator`` take their choices,
+documentation and the methods' own keys from the registries of :mod:`sphfem.fluid`).  Material
 properties of the fluid (``rho0``, ``c0``, ``mu``, ``sigma``) come from the
 ``[materials.<name>]`` tables of the fluid blocks; this section holds the numerical model.
 """
 
 from __future__ import annotations
 
-from sphfem.fluid import surface_tension
+from sphfem.fluid import integrators, pressure, surface_tension, viscosity, walls
 from sphfem.schema import VECTOR, Param, Section
+
+
+def _choice(registry, default: str | None = None, doc: str = "") -> tuple:
+    """The key choosing a method of ``registry`` (its choices and documentation from the
+    registered methods) and the methods' own keys."""
+    r = registry.REGISTRY
+    return (Param(r.key, str, default or r.default, choices=r.names(),
+                  doc=(doc + "; " if doc else "") + r.choices_doc()),
+            *r.scene_params())
 
 
 def _fluid_materials(ctx):
@@ -34,9 +44,10 @@ def _check(rec, ctx, path):
         if m.c0 is None:
             ctx.error(f"{where}.c0", "missing: a fluid material needs the artificial speed of "
                                      "sound c0 [m/s] (>= 10 x the largest expected speed)")
-        if rec.viscosity == "laminar" and m.mu is None:
-            ctx.error(f"{where}.mu", "missing: viscosity = \"laminar\" needs the dynamic "
-                                     "viscosity mu [Pa s] (or set [fluid] viscosity = \"none\")")
+        if rec.viscosity != "none" and m.mu is None:
+            ctx.error(f"{where}.mu", f"missing: viscosity = \"{rec.viscosity}\" needs the "
+                                     "dynamic viscosity mu [Pa s] (or set [fluid] viscosity "
+                                     "= \"none\")")
         if rec.surface_tension != "none":
             # the calibration constant's key exists only for its own model (Param.when)
             key = surface_tension.lookup(rec.surface_tension).constant_key
@@ -53,14 +64,14 @@ def _check(rec, ctx, path):
 
 
 FLUID = Section("fluid", (
+    *_choice(pressure, doc="pressure model, owns the time step"),
     Param("gamma", float, 7.0, positive=True,
           doc="Tait exponent of p = rho0 c0^2/gamma ((rho/rho0)^gamma - 1)"),
     Param("delta", float, 0.1, ge=0.0,
           doc="delta-SPH density diffusion coefficient (Antuono et al. 2010 with the "
               "renormalised density gradient; 0 = off)"),
-    Param("viscosity", str, "laminar", choices=("laminar", "none"),
-          doc="laminar: Morris et al. (1997) form (thesis eq. 2.21) with each fluid "
-              "particle's material mu; none: inviscid (only the artificial alpha term)"),
+    *_choice(viscosity, "laminar", doc="viscosity model (each fluid particle's material "
+                                       "mu)"),
     Param("alpha", float, 0.0, ge=0.0,
           doc="artificial viscosity coefficient (Monaghan 1992 in the always-on form of "
               "Marrone et al. 2011, pair coefficient alpha h c0, h = R/2; 0 = off, "
@@ -87,9 +98,9 @@ FLUID = Section("fluid", (
     Param("threads", int, 0, ge=0,
           doc="numba threads of the fluid passes (0: one below 20000 particles, else "
               "numba's default)"),
-    Param("surface_tension", str, "none", choices=surface_tension.names(),
-          doc=surface_tension.choices_doc()),
-    *surface_tension.scene_params(),
+    *_choice(surface_tension),
+    *_choice(walls, doc="wall model of the boundary particles (blocks of kind \"wall\")"),
+    *_choice(integrators, doc="time integrator of the weakly compressible model"),
     Param("shifting", str, "none", choices=("none", "interior", "all"),
           doc="particle shifting dr = -A h |v| dt grad C (Skillen et al. 2013, Xu & Yu "
               "2018, Park 2019 sec. 2.1.6): interior = only particles away from the free "
@@ -101,11 +112,13 @@ FLUID = Section("fluid", (
           doc="Marrone et al. (2010) free-surface detection every step (particle field "
               "`free_surface` = 1 on the surface); always on with shifting"),
 ), check=_check, doc=(
-    "Weakly compressible delta-SPH fluid (Tait EOS, symmetric pressure gradient, Morris "
+    "Weakly compressible delta-SPH fluid (Tait EOS, symmetric pressure gradient, laminar "
     "viscosity, delta-SPH continuity, symplectic position-Verlet step) with Adami et al. "
-    "(2012) walls: blocks of kind `\"wall\"` are the walls (fixed; their `rho` and `p` are "
-    "overwritten by the extrapolated wall state), `\"fluid\"` blocks the fluid; other kinds "
-    "do not interact with the fluid.  Fluid materials need `c0` and (laminar) `mu` and must "
-    "share `rho0` and `c0`.  The time step is the smallest of the acoustic, viscous and "
-    "force limits (each reported in summary.json), and guards stop the run on NaN/Inf, "
-    "speed, density ratio or particles leaving the domain."))
+    "(2012) walls; registries choose the methods (`pressure`, `viscosity`, "
+    "`surface_tension`, `walls`, `integrator`; sphfem.methods).  Blocks of kind "
+    "`\"wall\"` are the walls (fixed; their `rho` and `p` are overwritten by the "
+    "extrapolated wall state), `\"fluid\"` blocks the fluid; other kinds do not interact "
+    "with the fluid.  Fluid materials need `c0` and (laminar) `mu` and must share `rho0` and "
+    "`c0`.  The time step is the smallest of the acoustic, viscous and force limits (each "
+    "reported in summary.json), and guards stop the run on NaN/Inf, speed, density ratio or "
+    "particles leaving the domain."))

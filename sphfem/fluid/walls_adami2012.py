@@ -13,6 +13,8 @@ A wall particle without fluid neighbours gets p = 0, rho = rho0, ghost velocity 
 The fluid sees a wall particle with mass rho_w V_w (V_w its fixed volume ``vol``), so the
 pressure force is the same symmetric pair form as between fluid particles, and the wall's
 viscosity is taken equal to the fluid particle's (mu_i + mu_j -> 2 mu_i).
+
+Registered as ``[fluid] walls = "adami2012"`` (:mod:`sphfem.fluid.walls`).
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ import numpy as np
 from numba import njit, prange
 
 from sphfem.fluid.eos import tait_density
+from sphfem.fluid.walls import WallMethod, register
 from sphfem.kernels import FASTMATH, kernel_f
 from sphfem.neighbors import min_image
 from sphfem.particles import FLUID, WALL
@@ -87,3 +90,20 @@ def adami_wall_state(x, v, rho, p, acc, kind, offsets, indices, R, kernel_code, 
             rho[i] = rho0
             for k in range(dim):
                 vg[i, k] = v[i, k]
+
+
+def _wall_state(solver, g) -> None:
+    p, pa, nl = solver.p, solver.params, solver.nbrs
+    adami_wall_state(p.x, p.v, p.rho, p.p, p.acc, p.kind, nl.offsets, nl.indices, solver.R,
+                     solver.kernel_code, solver.period, g, pa.rho0, solver.B, pa.gamma,
+                     solver._scratch.vg)
+
+
+METHOD = register(WallMethod(
+    name="adami2012",
+    doc="boundary particles of Adami, Hu & Adams (2012): wall pressure extrapolated from "
+        "the fluid with the hydrostatic and wall-acceleration term, density from the "
+        "inverse Tait EOS, mirrored (no-slip) ghost velocity",
+    params=(),
+    wall_state=_wall_state,
+))
