@@ -4,6 +4,8 @@ Weak form (Galerkin, Lagrange elements, homogeneous material)::
 
     M dT/dt + K T = F,   M_ab = int rho c N_a N_b dV,   K_ab = int k grad N_a . grad N_b dV
 
+(M lumped to its row sums by default, see :class:`TransientHeat`)
+
 with dV = dx dy (dz) on planar 2D / 3D meshes and dV = 2 pi r dr dz on axisymmetric
 (r, z) meshes (x[0] = r >= 0; the r-weighted forms, e.g. Zienkiewicz & Taylor, *The
 Finite Element Method* vol. 1, sec. 9.2; the 2 pi makes every figure that of the whole
@@ -128,13 +130,18 @@ class TransientHeat:
     initial temperature, ``flux_group`` the facet group of the coupled surface,
     ``dirichlet`` {group: T [K]} fixed-temperature faces, ``theta`` in [1/2, 1],
     ``startup`` Crank-Nicolson steps replaced by two backward-Euler half steps
-    (Rannacher), ``element`` a scikit-fem element (default: the mesh's P1/Q1).
+    (Rannacher), ``element`` a scikit-fem element (default: the mesh's P1/Q1),
+    ``lumped``: the capacity matrix lumped to its row sums (default).  Lumping keeps
+    1^T M T (the energy) and the second-order accuracy of P1/Q1, and it removes the
+    undershoot of the consistent mass on the first steps of a suddenly heated surface
+    (the layer sqrt(alpha dt) thinner than the elements: measured T below the initial T
+    by 18 % of the surface rise on the contact problem with laterally long quads).
     """
 
     def __init__(self, mesh, k: float, rho: float, c: float, T0: float = 0.0, *,
                  axisymmetric: bool = False, flux_group: str = "top", dirichlet=None,
                  theta: float = 1.0, startup: int = 1, element=None,
-                 robin_ratio: float = 2.0):
+                 robin_ratio: float = 2.0, lumped: bool = True):
         if not 0.5 <= theta <= 1.0:
             raise ValueError(f"TransientHeat: theta must lie in [0.5, 1], got {theta}")
         self.mesh = mesh
@@ -169,6 +176,9 @@ class TransientHeat:
 
         self.K = conduction.assemble(self.basis).tocsr()
         self.M = capacity.assemble(self.basis).tocsr()
+        self.lumped = lumped
+        if lumped:  # row sums on the diagonal: the same energy 1^T M T, a maximum principle
+            self.M = sp.diags(np.asarray(self.M.sum(axis=1)).ravel()).tocsr()
         area = unit.assemble(self.fbasis)
         self.surface_dofs = self.basis.get_dofs(flux_group).all()
         #: lumped surface weights int N_a dS [m^2] of the surface dofs (ring: 2 pi r dS)

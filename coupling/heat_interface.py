@@ -1,0 +1,276 @@
+"""Conservative heat flux from SPH fluid particles into an FEM substrate surface, valid
+when the thermal layers are thinner than the particle spacing.
+
+The problem
+-----------
+When a fluid at T_f touches a solid at T_s the two thermal layers grow like
+sqrt(alpha t); over an impact (microseconds) they stay below a micrometre in water, far
+below the particle spacing dx.  A particle-to-particle wall conduction k (T_i - T_s)/dx
+then carries a flux ~ sqrt(alpha t)/dx of the true one.  The true contact flux of two
+semi-infinite bodies is (Carslaw & Jaeger 1959, sec. 2.15)
+
+    q = e_f (T_inf - T_i) / sqrt(pi t) = e_s (T_i - T_s0) / sqrt(pi t),
+    T_i = (e_f T_inf + e_s T_s0) / (e_f + e_s),   e = sqrt(k rho c),                  (1)
+
+i.e. the fluid side delivers q = k_f (T_inf - T_wall) / sqrt(pi alpha_f t) to a wall at
+T_wall, with the fluid profile T = T_wall + (T_inf - T_wall) erf(z / (2 sqrt(alpha_f t))).
+
+The closure (one formula from unresolved to resolved layers)
+-------------------------------------------------------------
+At each wetted surface node a (FEM surface basis function N_a, lumped area
+A_a = int N_a dS) the near-wall fluid is sampled from the wall-layer particles through
+their footprints on the wall: particle i (size h_i, default V_i^(1/dim), distance z_i
+from the wall) owns the patch F_i of side h_i centred on its projection (an annulus
+2 pi r dS on axisymmetric meshes), and
+
+    w_ai = B_ai / sum_j B_aj,   B_ai = chi(z_i / h_i) int_{F_i} N_a dS,
+    chi(u) = clip(2 - 2u, 0, 1)                                                        (2)
+
+(chi keeps the particles whose cell [z_i - h_i/2, z_i + h_i/2] touches the wall,
+tapering to zero one spacing out; the integral by Gauss points, ``n_gauss`` per lateral
+axis).  Because the N_a are a partition of unity, sum_a B_ai is particle i's footprint
+area (times chi): when the footprints tile the wall, a uniform flux takes the same heat
+per unit footprint from every wall particle, so the sampled temperature of a node is
+depleted by exactly Q / (rho c h) when the node has given Q [J/m^2] (a kernel-weighted
+Shepard sample with the same weights for removal over-weights the particles it depletes
+most; measured 3-5 % flux error on the contact problem at dx = 6.25 um).  A particle's
+temperature is the average of the fluid field over its cell (the finite-volume reading of an SPH
+particle: its heat m c T is the cell's heat), so with the similarity profile of (1),
+s = sqrt(alpha_f t_w), t_w the time since node a was wetted,
+
+    T_f,a - T_wall = (T_inf - T_wall) Phi_a(s),   Phi_a = sum_i w_ai <erf(z/2s)>_{cell i}  (3)
+
+and the wall flux of the fluid side, q = k_f (T_inf - T_wall)/(sqrt(pi) s), becomes
+
+    q_a = h_a (T_f,a - T_wall),   h_a = k_f / L_a,   L_a = sqrt(pi) s Phi_a(s).         (4)
+
+Limits: s << h (unresolved): Phi -> 1 - (cell-1 share) 2s/(sqrt(pi) h), L_a -> sqrt(pi
+alpha_f t_w): the contact-conduction flux e_f (T_inf - T_wall)/sqrt(pi t_w) of (1), with
+the depletion of the wall cell by the heat it already gave (its T is a cell average,
+T_inf - Q/(rho c h)) undone by the same Phi.  s >> h (resolved): <erf> -> z/(sqrt(pi) s),
+L_a -> sum_i w_ai z_c,i (cell centres): the one-sided wall conduction k_f (T_f - T_wall)/d
+of the resolved field.  Nothing in (4) is fitted: it is (1) read through the particles'
+cell averages, so it is exact for the two semi-infinite bodies at any spacing, and it
+hands over to the resolved conduction as the layer outgrows the particles.  Over a step
+the layer's 1/sqrt(t) is integrated exactly: h_a uses the step mean
+2 (sqrt(t_w + dt) - sqrt(t_w)) / dt of 1/sqrt(t) and Phi at mid-step.
+
+Conservation
+------------
+The exchange is implicit in the substrate's surface temperature (the Robin term of
+:class:`sphfem.fem.heat_transient.TransientHeat`, eq. 1-2 there) and explicit in the
+fluid temperatures T_f,a (the fluid's heat capacity per wetted node is much larger than
+that of the sub-um surface layer).  The heat the substrate takes in at node a in the step,
+F_a dt, is removed from the particles with the weights (2):
+
+    dE_i = sum_a w_ai F_a dt,   sum_i dE_i = sum_a F_a dt                                 (5)
+
+(sum_i w_ai = 1 on every wetted node; dry nodes exchange nothing), so the heat the fluid
+loses equals the heat the substrate gains to round-off.
+
+Wetting: node a is wetted while the wall-layer footprints cover at least
+``wet_fraction`` of it, sum_i B_ai >= wet_fraction A_a; t_w counts from the start of the
+first wetted step and restarts when the node dries.
+
+What the model assumes (and where it is not exact): the fluid layer grows from the
+wetting time like the similarity solution (stagnant fluid; a spreading lamella's
+boundary layer is thinner, so (4) under-predicts there until the layer is resolved);
+T_inf and T_wall vary slowly compared with the layer's age; one fluid material per node.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from scipy.special import erf
+
+from sphfem.fem.heat_transient import ierfc
+
+__all__ = ["ContactHeatInterface", "cell_mean_erf", "contact_solution"]
+
+
+def cell_mean_erf(a, b, s):
+    """Mean of erf(z / (2 s)) over [a, b] (0 <= a < b), elementwise:
+    (G(b) - G(a)) / (b - a),  G(z) = int_0^z erf(u / 2s) du = z - 2s/sqrt(pi) + 2s ierfc(z/2s)."""
+    a, b, s = (np.asarray(v, float) for v in (a, b, s))
+    s = np.maximum(s, 1e-300)
+
+    def G(z):
+        return z - 2.0 * s / math.sqrt(math.pi) + 2.0 * s * ierfc(z / (2.0 * s))
+
+    width = b - a
+    out = np.where(width > 1e-12 * np.maximum(b, 1e-300),
+                   (G(b) - G(a)) / np.where(width > 0, width, 1.0),
+                   erf(0.5 * (a + b) / (2.0 * s)))
+    return out
+
+
+def contact_solution(t, T_f, T_s, k_f, rho_f, c_f, k_s, rho_s, c_s):
+    """Two semi-infinite bodies brought into contact at t = 0 (eq. 1): interface
+    temperature T_i, flux q(t) [W/m^2] into the solid and heat Q(t) = 2 q t [J/m^2]."""
+    ef = math.sqrt(k_f * rho_f * c_f)
+    es = math.sqrt(k_s * rho_s * c_s)
+    Ti = (ef * T_f + es * T_s) / (ef + es)
+    t = np.asarray(t, float)
+    C = ef * es * (T_f - T_s) / ((ef + es) * math.sqrt(math.pi))
+    return Ti, C / np.sqrt(t), 2.0 * C * np.sqrt(t)
+
+
+class ContactHeatInterface:
+    """Fluid particles -> :class:`~sphfem.fem.heat_transient.TransientHeat` surface (module
+    docstring).
+
+    ``substrate``: the FEM heat solver (its flux group is the wetted surface, a plane
+    ``x[axis] = level``; the fluid lies on the side ``side`` = +1 / -1 of it).  ``k_f``,
+    ``rho_f``, ``c_f``: the fluid's properties; ``period`` (dim,) periodic lengths along
+    the wall (0: open) of the cell starting at ``lo`` (footprints wrap); footprint parts
+    beyond an open surface's extent are dropped.  Call :meth:`step` once per coupling
+    step.
+    """
+
+    def __init__(self, substrate, k_f: float, rho_f: float, c_f: float,
+                 axis: int = -1, level: float | None = None,
+                 side: int = 1, wet_fraction: float = 0.5, period=None, lo=None,
+                 n_gauss: int = 4):
+        self.sub = substrate
+        self.k_f, self.rho_f, self.c_f = float(k_f), float(rho_f), float(c_f)
+        self.alpha_f = self.k_f / (self.rho_f * self.c_f)
+        self.X = substrate.surface_points()
+        self.dim = self.X.shape[1]
+        self.axis = axis % self.dim
+        self.level = float(np.mean(self.X[:, self.axis])) if level is None else float(level)
+        if np.ptp(self.X[:, self.axis]) > 1e-9 * max(np.ptp(self.X), 1e-300):
+            raise ValueError("ContactHeatInterface: the flux group must be a plane "
+                             "x[axis] = level")
+        self.side = 1 if side >= 0 else -1
+        self.wet_fraction = float(wet_fraction)
+        self.period = (np.zeros(self.dim) if period is None
+                       else np.broadcast_to(np.asarray(period, float), (self.dim,)).copy())
+        self.lo = (np.zeros(self.dim) if lo is None
+                   else np.broadcast_to(np.asarray(lo, float), (self.dim,)).copy())
+        if self.period[self.axis] > 0:
+            raise ValueError("ContactHeatInterface: the wall-normal axis cannot be periodic")
+        self.n_gauss = int(n_gauss)
+        self._slo = self.X.min(axis=0)
+        self._shi = self.X.max(axis=0)
+        self._eps = 1e-9 * float(np.max(np.ptp(self.X, axis=0)))
+        n = self.X.shape[0]
+        self.t = 0.0
+        self.t_wet = np.full(n, np.nan)   #: wetting time per surface node (nan: dry)
+        self.heat_to_substrate = 0.0      #: sum of the substrate's F dt [J]
+        self.heat_from_fluid = 0.0        #: sum of the particles' dE [J]
+        self.steps = 0
+        self.last: dict = {}
+
+    # -- sampling -----------------------------------------------------------------------
+    def weights(self, x, vol, h=None):
+        """Sampling / removal weights (2) of the particles ``x`` (n, dim) with volumes
+        ``vol`` and sizes ``h`` (default V^(1/dim)).
+
+        Returns ``(rows, cols, w, wet, z, h)``: rows the surface node, cols the particle,
+        ``w`` = B_ai / sum_j B_aj over each wetted node (module docstring, eq. 2)."""
+        import scipy.sparse as sp
+
+        x = np.atleast_2d(np.asarray(x, float))
+        n = x.shape[0]
+        vol = np.broadcast_to(np.asarray(vol, float), (n,))
+        h = vol ** (1.0 / self.dim) if h is None else np.broadcast_to(
+            np.asarray(h, float), (n,))
+        z = self.side * (x[:, self.axis] - self.level)
+        nX = self.X.shape[0]
+        chi = np.clip(2.0 - 2.0 * np.maximum(z, 0.0) / h, 0.0, 1.0)
+        near = np.flatnonzero((z > -0.5 * h) & (chi > 0.0))  # the wall layer
+        if near.size == 0:
+            e = np.zeros(0)
+            return (e.astype(np.int64), e.astype(np.int64), e, np.zeros(nX, bool), z, h)
+        # footprint quadrature: n_g Gauss points per lateral axis over [-h/2, h/2]
+        g, gw = np.polynomial.legendre.leggauss(self.n_gauss)
+        lat = [a for a in range(self.dim) if a != self.axis]
+        grids = np.meshgrid(*[g] * len(lat), indexing="ij")
+        off = np.stack([q.ravel() for q in grids], -1) * 0.5          # (nq, L), in [-1/2, 1/2]
+        wq = np.prod(np.meshgrid(*[gw * 0.5] * len(lat), indexing="ij"), axis=0).ravel()
+        nq = wq.size
+        P = np.repeat(x[near], nq, axis=0)
+        hq = np.repeat(h[near], nq)
+        for c, a in enumerate(lat):
+            P[:, a] += np.tile(off[:, c], near.size) * hq
+        P[:, self.axis] = self.level - self.side * self._eps
+        meas = np.tile(wq, near.size) * hq ** len(lat) * np.repeat(chi[near], nq)
+        if self.sub.axisymmetric:
+            meas = meas * 2.0 * np.pi * np.abs(P[:, 0])
+            P[:, 0] = np.abs(P[:, 0])  # a footprint across the axis folds back
+        part = np.repeat(near, nq)
+        for a in lat:  # periodic axes wrap; open ones drop points beyond the surface
+            if self.period[a] > 0:
+                P[:, a] = self.lo[a] + np.mod(P[:, a] - self.lo[a], self.period[a])
+                P[:, a] = np.clip(P[:, a], self._slo[a], self._shi[a])
+        inside = np.all((P[:, lat] >= self._slo[lat]) & (P[:, lat] <= self._shi[lat]),
+                        axis=1)
+        P, meas, part = P[inside], meas[inside], part[inside]
+        if P.shape[0] == 0:
+            e = np.zeros(0)
+            return (e.astype(np.int64), e.astype(np.int64), e, np.zeros(nX, bool), z, h)
+        N = self.sub.basis.probes(P.T).tocsr()[:, self.sub.surface_dofs].tocoo()
+        # B_ai = int_{footprint i} N_a dS
+        B = sp.coo_matrix((N.data * meas[N.row], (N.col, part[N.row])),
+                          shape=(nX, n)).tocsr()
+        B.sum_duplicates()
+        cover = np.asarray(B.sum(axis=1)).ravel()
+        wet = cover >= self.wet_fraction * self.sub.surface_area
+        Bc = B.tocoo()
+        keep = wet[Bc.row] & (Bc.data > 0)
+        rows, cols = Bc.row[keep], Bc.col[keep]
+        w = Bc.data[keep] / cover[rows]
+        return rows, cols, w, wet, z, h
+
+    # -- one coupling step ---------------------------------------------------------------
+    def conductance(self, t_w, dt, rows, cols, w, z, h, n_nodes):
+        """h_a of eq. (4) [W/(m^2 K)] per node for layer ages ``t_w`` at the start of the
+        step (step mean of 1/sqrt(t), Phi at mid-step)."""
+        s_mid = np.sqrt(self.alpha_f * (t_w + 0.5 * dt))
+        a = np.maximum(z[cols] - 0.5 * h[cols], 0.0)
+        b = np.maximum(z[cols] + 0.5 * h[cols], a + 1e-12 * h[cols])
+        phi = np.bincount(rows, weights=w * cell_mean_erf(a, b, s_mid[rows]),
+                          minlength=n_nodes)
+        mean_inv_sqrt = 2.0 * (np.sqrt(t_w + dt) - np.sqrt(t_w)) / dt
+        with np.errstate(divide="ignore"):
+            return np.where(phi > 0, self.k_f * mean_inv_sqrt
+                            / (math.sqrt(math.pi * self.alpha_f) * phi), 0.0)
+
+    def step(self, x, T, vol, dt: float, h=None) -> np.ndarray:
+        """Exchange heat over ``dt`` between the particles (positions ``x`` (n, dim),
+        temperatures ``T`` [K], volumes ``vol``; fluid particles only) and the substrate,
+        whose temperature it advances (one :meth:`TransientHeat.step`).  Returns the heat
+        each particle loses [J] (eq. 5): apply it as T_i -= dE_i / (m_i c_i)."""
+        T = np.asarray(T, float)
+        rows, cols, w, wet, z, hh = self.weights(x, vol, h)
+        nX = self.X.shape[0]
+        newly = wet & np.isnan(self.t_wet)
+        self.t_wet[newly] = self.t
+        self.t_wet[~wet] = np.nan
+        t_w = np.where(wet, self.t - np.nan_to_num(self.t_wet), 0.0)
+        T_f = np.bincount(rows, weights=w * T[cols], minlength=nX)
+        hA = np.where(wet, self.conductance(t_w, dt, rows, cols, w, z, hh, nX), 0.0)
+        hA = hA * self.sub.surface_area
+        Ts0 = self.sub.surface_temperature()
+        T_ext = np.where(wet, T_f, Ts0)
+        heat = self.sub.step(dt, robin=(hA, T_ext))  # F_a dt per surface node [J]
+        dry_heat = float(np.abs(heat[~wet]).sum())
+        dE = np.bincount(cols, weights=w * heat[rows], minlength=len(T))
+        self.heat_to_substrate += float(heat.sum())
+        self.heat_from_fluid += float(dE.sum())
+        self.t += dt
+        self.steps += 1
+        self.last = {"wetted": int(wet.sum()), "T_fluid": T_f, "hA": hA,
+                     "heat": heat, "dry_heat": dry_heat}
+        return dE
+
+    def diagnostics(self) -> dict:
+        return {"steps": self.steps, "t": self.t,
+                "heat_to_substrate_J": self.heat_to_substrate,
+                "heat_from_fluid_J": self.heat_from_fluid,
+                "balance_rel": ((self.heat_from_fluid - self.heat_to_substrate)
+                                / max(abs(self.heat_to_substrate), 1e-300)),
+                "wetted_nodes": self.last.get("wetted", 0),
+                "substrate_factorisations": self.sub.factorisations}
