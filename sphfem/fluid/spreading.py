@@ -1,0 +1,281 @@
+"""Maximum spreading of a droplet on a flat wall: published correlations and a measurement.
+
+Dimensionless groups (D the droplet diameter, v the impact speed, theta the contact angle)::
+
+    We = rho v^2 D / sigma,   Re = rho v D / mu,   beta_max = D_max / D
+
+Correlations (all diameter-based; ``theta`` in degrees, the advancing contact angle):
+
+* Pasandideh-Fard, Qiao, Chandra & Mostaghimi (1996), Phys. Fluids 8, 650 -- energy balance
+  with viscous dissipation in a boundary layer of thickness 2 D / sqrt(Re)::
+
+      beta_max = sqrt((We + 12) / (3 (1 - cos theta) + 4 We / sqrt(Re)))
+
+  Valid where the boundary layer is thinner than the splat (Re >> 1) and We >> 1.
+* Ukiwe & Kwok (2005), Langmuir 21, 666 -- the same balance with the surface energy of the
+  splat at maximum spreading taken as a cylinder plus its top (an implicit cubic)::
+
+      (We + 12) beta = 8 + beta^3 (3 (1 - cos theta) + 4 We / sqrt(Re))
+
+* Clanet, Beguin, Richard & Quere (2004), J. Fluid Mech. 517, 199 -- scaling laws with the
+  impact parameter P = We Re^(-4/5): capillary regime (P < 1) beta_max = 0.9 We^(1/4),
+  viscous regime (P > 1) beta_max = Re^(1/5).  The two branches differ by 10 % at P = 1.
+* Roisman (2009), Phys. Fluids 21, 052104 -- semi-empirical, for inertia-dominated impacts
+  (Re >> 1, We >> 1)::
+
+      beta_max = 0.87 Re^(1/5) - 0.40 Re^(2/5) We^(-1/2)
+
+* Laan, de Bruin, Bartolo, Josserand & Bonn (2014), Phys. Rev. Applied 2, 044018 -- a Pade
+  interpolation between the capillary and viscous regimes with P = We Re^(-2/5)::
+
+      beta_max = Re^(1/5) sqrt(P) / (A + sqrt(P)),   A = 1.24
+
+Scheller & Bousfield (1995) is not included (its fitted form could not be checked against
+the paper here), nor are experimental points: this module holds no measured data.
+
+Measurement (:func:`contact_diameter`, :func:`max_spreading`): the wetted (contact-line)
+diameter of a frame is twice the largest distance from the impact axis of the fluid
+particles lying within ``within`` particle spacings above the wall, plus one spacing (each
+particle stands for a cell of width dx, so the fluid reaches dx/2 beyond its centre); the
+maximum spreading is the largest wetted diameter over the frames.
+
+Artificial viscosity: the Monaghan (1992) term with pair coefficient alpha h c0 acts in the
+continuum limit as a kinematic viscosity nu_art = alpha h c0 / (2 (d + 2)) (Monaghan 2005,
+Rep. Prog. Phys. 68, 1703, sec. 4.1), so an SPH run behaves like Re_eff = v D / (nu +
+nu_art) (:func:`effective_reynolds`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Iterable
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+FLUID_KIND = 0  # sphfem.particles.FLUID (not imported: keep this module numba-free)
+
+
+# --------------------------------------------------------------------------------------
+# dimensionless groups
+
+
+def weber(rho: float, v: float, D: float, sigma: float) -> float:
+    """We = rho v^2 D / sigma (diameter-based)."""
+    return rho * v * v * D / sigma
+
+
+def reynolds(rho: float, v: float, D: float, mu: float) -> float:
+    """Re = rho v D / mu (diameter-based)."""
+    return rho * v * D / mu
+
+
+def artificial_nu(alpha: float, h: float, c0: float, dim: int) -> float:
+    """Kinematic viscosity of the artificial viscosity alpha h c0: alpha h c0 / (2 (d + 2))
+    [m^2/s] (Monaghan 2005, sec. 4.1); ``h`` is the smoothing length (sphfem: R / 2)."""
+    return alpha * h * c0 / (2.0 * (dim + 2))
+
+
+def effective_reynolds(v: float, D: float, nu: float, nu_art: float = 0.0) -> float:
+    """Re_eff = v D / (nu + nu_art): the Reynolds number the SPH fluid behaves like."""
+    return v * D / (nu + nu_art)
+
+
+# --------------------------------------------------------------------------------------
+# correlations
+
+
+def pasandideh_fard_1996(We, Re, theta_deg: float = 90.0):
+    """beta_max = sqrt((We + 12) / (3 (1 - cos theta) + 4 We / sqrt(Re)))
+    (Pasandideh-Fard et al. 1996, eq. 7)."""
+    We, Re = np.asarray(We, float), np.asarray(Re, float)
+    c = 1.0 - math.cos(math.radians(theta_deg))
+    return np.sqrt((We + 12.0) / (3.0 * c + 4.0 * We / np.sqrt(Re)))
+
+
+def ukiwe_kwok_2005(We, Re, theta_deg: float = 90.0):
+    """Largest positive root beta of (We + 12) beta = 8 + beta^3 (3 (1 - cos theta)
+    + 4 We / sqrt(Re)) (Ukiwe & Kwok 2005); NaN where the cubic has no positive root."""
+    We, Re = np.broadcast_arrays(np.asarray(We, float), np.asarray(Re, float))
+    c = 1.0 - math.cos(math.radians(theta_deg))
+    out = np.full(We.shape, np.nan)
+    for idx in np.ndindex(We.shape):
+        a = 3.0 * c + 4.0 * We[idx] / math.sqrt(Re[idx])
+        roots = np.roots([a, 0.0, -(We[idx] + 12.0), 8.0])
+        real = roots[(abs(roots.imag) < 1e-9 * max(1.0, abs(roots).max())) & (roots.real > 0)]
+        if real.size:
+            out[idx] = real.real.max()
+    return out if out.ndim else float(out)
+
+
+def clanet_2004(We, Re):
+    """beta_max = 0.9 We^(1/4) if P = We Re^(-4/5) < 1, else Re^(1/5) (Clanet et al. 2004)."""
+    We, Re = np.asarray(We, float), np.asarray(Re, float)
+    P = We * Re ** -0.8
+    return np.where(P < 1.0, 0.9 * We**0.25, Re**0.2)
+
+
+def roisman_2009(We, Re):
+    """beta_max = 0.87 Re^(1/5) - 0.40 Re^(2/5) We^(-1/2) (Roisman 2009)."""
+    We, Re = np.asarray(We, float), np.asarray(Re, float)
+    return 0.87 * Re**0.2 - 0.40 * Re**0.4 / np.sqrt(We)
+
+
+#: fitted constant of the Pade approximant of Laan et al. (2014)
+LAAN_A = 1.24
+
+
+def laan_2014(We, Re):
+    """beta_max = Re^(1/5) sqrt(P) / (A + sqrt(P)), P = We Re^(-2/5), A = 1.24
+    (Laan et al. 2014)."""
+    We, Re = np.asarray(We, float), np.asarray(Re, float)
+    sp = np.sqrt(We * Re**-0.4)
+    return Re**0.2 * sp / (LAAN_A + sp)
+
+
+@dataclass(frozen=True)
+class Correlation:
+    """A published maximum-spreading correlation beta_max(We, Re[, theta])."""
+
+    name: str
+    citation: str
+    formula: str
+    validity: str
+    func: Callable
+    uses_theta: bool = False
+
+    def __call__(self, We, Re, theta_deg: float = 90.0):
+        if self.uses_theta:
+            return self.func(We, Re, theta_deg)
+        return self.func(We, Re)
+
+
+CORRELATIONS: dict[str, Correlation] = {c.name: c for c in (
+    Correlation("pasandideh-fard-1996",
+                "Pasandideh-Fard, Qiao, Chandra & Mostaghimi (1996), Phys. Fluids 8, 650",
+                "sqrt((We + 12) / (3 (1 - cos theta) + 4 We / sqrt(Re)))",
+                "energy balance; Re >> 1 (boundary layer thinner than the splat), We >> 1",
+                pasandideh_fard_1996, uses_theta=True),
+    Correlation("ukiwe-kwok-2005", "Ukiwe & Kwok (2005), Langmuir 21, 666",
+                "(We + 12) beta = 8 + beta^3 (3 (1 - cos theta) + 4 We / sqrt(Re))",
+                "energy balance as Pasandideh-Fard et al., cylindrical splat surface",
+                ukiwe_kwok_2005, uses_theta=True),
+    Correlation("clanet-2004",
+                "Clanet, Beguin, Richard & Quere (2004), J. Fluid Mech. 517, 199",
+                "0.9 We^(1/4) for P = We Re^(-4/5) < 1, else Re^(1/5)",
+                "scaling laws; capillary regime P < 1, viscous regime P > 1",
+                clanet_2004),
+    Correlation("roisman-2009", "Roisman (2009), Phys. Fluids 21, 052104",
+                "0.87 Re^(1/5) - 0.40 Re^(2/5) We^(-1/2)",
+                "semi-empirical; inertia-dominated impacts, Re >> 1 and We >> 1",
+                roisman_2009),
+    Correlation("laan-2014",
+                "Laan, de Bruin, Bartolo, Josserand & Bonn (2014), Phys. Rev. Applied 2, "
+                "044018",
+                "Re^(1/5) sqrt(P) / (1.24 + sqrt(P)), P = We Re^(-2/5)",
+                "interpolates the capillary (We^(1/2) / A, P << A^2) and viscous "
+                "(Re^(1/5), P >> A^2) limits; A = 1.24 fitted to experiments",
+                laan_2014),
+)}
+
+
+def correlation_table(We: float, Re: float, theta_deg: float = 90.0) -> dict[str, float]:
+    """beta_max of every correlation at (We, Re, theta)."""
+    return {name: float(c(We, Re, theta_deg)) for name, c in CORRELATIONS.items()}
+
+
+# --------------------------------------------------------------------------------------
+# measurement
+
+
+def contact_diameter(x, wall_level: float, dx: float, kind=None, *, axis: int = -1,
+                     within: float = 1.0, center=None) -> float:
+    """Wetted diameter of one frame [m]: 2 (max_i r_i + dx / 2) over the fluid particles i
+    with 0 <= (x_i[axis] - wall_level) < within dx, r_i their distance from the impact axis.
+
+    ``x``: (n, dim) positions; ``kind``: particle kinds (only FLUID rows count; None: all
+    rows are fluid); ``wall_level``: the wall surface along ``axis`` (the normal, pointing
+    into the fluid); ``center``: the impact axis' position in the other coordinates
+    (default: the mean of the selected particles).  0 when no fluid particle touches the
+    wall.  In 2D the "diameter" is the wetted length.
+    """
+    x = np.asarray(x, float)
+    if x.ndim != 2:
+        raise ValueError(f"x: expected an (n, dim) array, got shape {x.shape}")
+    dim = x.shape[1]
+    axis = axis % dim
+    sel = np.ones(len(x), bool) if kind is None else (np.asarray(kind) == FLUID_KIND)
+    height = x[:, axis] - wall_level
+    sel &= (height >= -0.5 * dx) & (height < within * dx)
+    if not sel.any():
+        return 0.0
+    lateral = np.delete(x[sel], axis, axis=1)
+    c = lateral.mean(axis=0) if center is None else np.asarray(center, float)
+    r = np.sqrt(((lateral - c) ** 2).sum(axis=1))
+    return float(2.0 * (r.max() + 0.5 * dx))
+
+
+@dataclass(frozen=True)
+class Spreading:
+    """Wetted diameter history and its maximum."""
+
+    times: np.ndarray      # s
+    diameters: np.ndarray  # m
+    D: float               # droplet diameter [m]
+
+    @property
+    def index(self) -> int:
+        return int(np.argmax(self.diameters))
+
+    @property
+    def d_max(self) -> float:
+        return float(self.diameters[self.index])
+
+    @property
+    def beta_max(self) -> float:
+        """D_max / D."""
+        return self.d_max / self.D
+
+    @property
+    def t_max(self) -> float:
+        """Time of the maximum [s]."""
+        return float(self.times[self.index])
+
+    @property
+    def at_end(self) -> bool:
+        """The maximum is the last frame (the run may have stopped before it)."""
+        return self.index == len(self.diameters) - 1
+
+
+def max_spreading(frames: Iterable, D: float, wall_level: float, dx: float,
+                  **kw) -> Spreading:
+    """Wetted diameter of each frame ``(t, x, kind)`` and its maximum over time
+    (keywords as :func:`contact_diameter`)."""
+    ts, ds = [], []
+    for t, x, kind in frames:
+        ts.append(float(t))
+        ds.append(contact_diameter(x, wall_level, dx, kind, **kw))
+    if not ts:
+        raise ValueError("max_spreading: no frames")
+    return Spreading(np.asarray(ts), np.asarray(ds), float(D))
+
+
+def read_frames(folder, name: str = "particles", dim: int = 3):
+    """Yield ``(t, x, kind)`` of each frame of a particle series (``folder/name.pvd``, as
+    :class:`sphfem.output.ParticleSeries` writes it; ``kind`` must be among the written
+    fields); positions are cut to the scene's dimension ``dim``."""
+    import xml.etree.ElementTree as ET
+
+    import meshio
+
+    folder = Path(folder)
+    root = ET.parse(folder / f"{name}.pvd").getroot()
+    for ds in root.iter("DataSet"):
+        t = float(ds.get("timestep"))
+        mesh = meshio.read(folder / ds.get("file"))
+        if "kind" not in mesh.point_data:
+            raise ValueError(f"{ds.get('file')}: no 'kind' field (add \"kind\" to [output] "
+                             f"fields)")
+        x = np.asarray(mesh.points, float)[:, :dim]
+        yield t, x, np.asarray(mesh.point_data["kind"]).ravel().astype(int)

@@ -1,0 +1,142 @@
+"""Maximum-spreading correlations (values worked by hand) and the wetted-diameter measurement
+(synthetic lamellae of known radius)."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from sphfem.fluid import spreading as sp
+from sphfem.output import ParticleSeries
+from sphfem.particles import FLUID, WALL, ParticleSet
+
+# --------------------------------------------------------------------------------------
+# correlations at We = 100, Re = 1000 (theta = 90 deg unless stated), by hand:
+#   Re^(1/5) = 10^0.6 = 3.981072, Re^(2/5) = 10^1.2 = 15.848932, Re^(4/5) = 251.188643,
+#   sqrt(Re) = 31.622777, We^(1/4) = 3.162278
+
+
+def test_pasandideh_fard_by_hand():
+    # 4 We / sqrt(Re) = 400 / 31.622777 = 12.649111
+    # theta = 90:  (100 + 12) / (3 + 12.649111) = 7.156952 -> sqrt = 2.675248
+    # theta = 180: 112 / (6 + 12.649111) = 6.005648 -> sqrt = 2.450642
+    assert sp.pasandideh_fard_1996(100.0, 1000.0) == pytest.approx(2.675248, rel=1e-6)
+    assert sp.pasandideh_fard_1996(100.0, 1000.0, 180.0) == pytest.approx(2.450642, rel=1e-6)
+
+
+def test_ukiwe_kwok_by_hand():
+    # 15.649111 beta^3 - 112 beta + 8 = 0: at beta = 2.6390 the left side is +0.05, at
+    # 2.6385 it is -0.06 (by hand), so the root lies in between
+    b = sp.ukiwe_kwok_2005(100.0, 1000.0)
+    assert 2.6385 < b < 2.6390
+    a = 3.0 + 400.0 / math.sqrt(1000.0)
+    assert a * b**3 - 112.0 * b + 8.0 == pytest.approx(0.0, abs=1e-9)
+
+
+def test_clanet_regimes_by_hand():
+    # P = We Re^(-4/5) = 100 / 251.188643 = 0.398 < 1: 0.9 We^(1/4) = 0.9 * 3.162278
+    assert sp.clanet_2004(100.0, 1000.0) == pytest.approx(2.846050, rel=1e-6)
+    # We = 1000: P = 3.98 > 1: Re^(1/5)
+    assert sp.clanet_2004(1000.0, 1000.0) == pytest.approx(3.981072, rel=1e-6)
+
+
+def test_roisman_by_hand():
+    # 0.87 * 3.981072 - 0.40 * 15.848932 / 10 = 3.463533 - 0.633957 = 2.829576
+    assert sp.roisman_2009(100.0, 1000.0) == pytest.approx(2.829576, rel=1e-6)
+
+
+def test_laan_by_hand():
+    # P = We Re^(-2/5) = 100 / 15.848932 = 6.309573, sqrt(P) = 2.511886;
+    # Re^(1/5) sqrt(P) = 10 exactly; 10 / (1.24 + 2.511886) = 2.665325
+    assert sp.laan_2014(100.0, 1000.0) == pytest.approx(2.665325, rel=1e-6)
+
+
+def test_correlations_vectorise_and_table():
+    We = np.array([100.0, 3472.0])
+    Re = np.array([1000.0, 16667.0])
+    for c in sp.CORRELATIONS.values():
+        out = np.asarray(c(We, Re))
+        assert out.shape == (2,) and np.all(np.isfinite(out))
+        assert out[0] == pytest.approx(float(c(100.0, 1000.0)), rel=1e-12)
+    tab = sp.correlation_table(100.0, 1000.0)
+    assert set(tab) == set(sp.CORRELATIONS)
+    # inertia-dominated limit: the Re-only forms grow like Re^(1/5)
+    assert sp.roisman_2009(1e12, 1e5) / sp.roisman_2009(1e12, 1e4) == pytest.approx(
+        10**0.2, rel=1e-5)
+
+
+def test_artificial_viscosity_and_reynolds():
+    # alpha h c0 / (2 (d + 2)): 0.02 * 9.375e-6 * 500 / 10 = 9.375e-6 m^2/s
+    assert sp.artificial_nu(0.02, 9.375e-6, 500.0, 3) == pytest.approx(9.375e-6, rel=1e-12)
+    assert sp.artificial_nu(0.02, 9.375e-6, 500.0, 2) == pytest.approx(0.02 * 9.375e-6
+                                                                       * 500.0 / 8)
+    assert sp.weber(1000.0, 50.0, 1e-4, 0.072) == pytest.approx(3472.2222, rel=1e-6)
+    assert sp.reynolds(1000.0, 50.0, 1e-4, 3e-4) == pytest.approx(16666.667, rel=1e-6)
+    assert sp.effective_reynolds(50.0, 1e-4, 3e-7, 9.375e-6) == pytest.approx(
+        5e-3 / 9.675e-6, rel=1e-12)
+
+
+# --------------------------------------------------------------------------------------
+# measurement
+
+
+def _lamella_3d(radius, dx, layers=2, center=(0.0, 0.0)):
+    """Cell-centred lattice disc of ``radius`` and ``layers`` layers on the wall z = 0."""
+    n = int(np.ceil(radius / dx)) + 1
+    g = (np.arange(-n, n) + 0.5) * dx
+    X, Y = np.meshgrid(g, g, indexing="ij")
+    inside = X**2 + Y**2 <= radius**2
+    pts = [np.column_stack([X[inside] + center[0], Y[inside] + center[1],
+                            np.full(inside.sum(), (k + 0.5) * dx)]) for k in range(layers)]
+    return np.vstack(pts)
+
+
+@pytest.mark.parametrize("radius", [0.13, 0.2, 0.31])
+def test_contact_diameter_of_a_synthetic_lamella(radius):
+    dx = 0.01
+    fluid = _lamella_3d(radius, dx, center=(0.05, -0.02))
+    # distractors: a splash droplet above the contact layer far out, a thick rim above the
+    # wetted layer (z > dx) and wall particles below z = 0, all beyond the wetted radius
+    splash = np.array([[0.05 + 2.5 * radius, 0.0, 3.2 * dx]])
+    rim = np.array([[0.05 + radius + 2 * dx, -0.02, 1.5 * dx]])
+    wall = _lamella_3d(3 * radius, dx, layers=3) - np.array([0, 0, 3 * dx])
+    x = np.vstack([fluid, splash, rim, wall])
+    kind = np.r_[np.full(len(fluid) + 2, FLUID), np.full(len(wall), WALL)]
+    d = sp.contact_diameter(x, 0.0, dx, kind)
+    # the lattice fills the disc to within one cell: |D - 2 radius| <= dx
+    assert abs(d - 2 * radius) <= dx
+    # with the axis given the same answer; without kinds the wall rows (z < -dx/2) still drop
+    assert sp.contact_diameter(x, 0.0, dx, kind, center=(0.05, -0.02)) == pytest.approx(
+        d, abs=dx)
+    # within = 2 takes the rim's layer (1.5 dx above the wall) as wetted
+    assert sp.contact_diameter(x, 0.0, dx, kind, within=2.0, center=(0.05, -0.02)) == (
+        pytest.approx(2 * (radius + 2 * dx) + dx, abs=1e-12))
+
+
+def test_contact_diameter_2d_and_empty():
+    dx = 0.02
+    xs = (np.arange(-10, 10) + 0.5) * dx  # a strip of length 0.4 on the wall y = 1
+    x = np.column_stack([xs, np.full(xs.size, 1.0 + 0.5 * dx)])
+    assert sp.contact_diameter(x, 1.0, dx) == pytest.approx(0.4, abs=1e-12)
+    # nothing within one spacing of the wall: 0
+    assert sp.contact_diameter(x + [0.0, 2 * dx], 1.0, dx) == 0.0
+
+
+def test_max_spreading_over_frames_and_from_files(tmp_path):
+    dx = 0.01
+    radii = [0.05, 0.12, 0.2, 0.17, 0.15]
+    series = ParticleSeries(tmp_path)
+    frames = []
+    for i, r in enumerate(radii):
+        x = _lamella_3d(r, dx)
+        frames.append((0.1 * i, x, np.full(len(x), FLUID)))
+        series.write(0.1 * i, ParticleSet.from_arrays(x, vol=dx**3), ["kind"])
+    s = sp.max_spreading(frames, D=0.1, wall_level=0.0, dx=dx)
+    assert s.index == 2 and s.t_max == pytest.approx(0.2)
+    assert abs(s.d_max - 0.4) <= dx and s.beta_max == pytest.approx(s.d_max / 0.1)
+    assert not s.at_end
+    again = sp.max_spreading(sp.read_frames(tmp_path), D=0.1, wall_level=0.0, dx=dx)
+    np.testing.assert_allclose(again.diameters, s.diameters, rtol=1e-12)
+    np.testing.assert_allclose(again.times, s.times, rtol=1e-12)
