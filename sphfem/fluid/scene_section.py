@@ -12,6 +12,10 @@ from __future__ import annotations
 from sphfem.fluid import integrators, pressure, surface_tension, viscosity, walls
 from sphfem.schema import VECTOR, Param, Section
 
+#: the [fluid] keys that choose a method -> their registry (sphfem.methods.MethodRegistry)
+REGISTRIES = {m.REGISTRY.key: m.REGISTRY
+              for m in (pressure, viscosity, surface_tension, walls, integrators)}
+
 
 def _choice(registry, default: str | None = None, doc: str = "") -> tuple:
     """The key choosing a method of ``registry`` (its choices and documentation from the
