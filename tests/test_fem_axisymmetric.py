@@ -373,16 +373,19 @@ def cylinder_mesh(radius, depth, h_fine, h_coarse, refine_radius):
 @pytest.mark.slow
 def test_against_3d_substrate_under_a_pressure_patch():
     """Smooth pressure patch (a = 0.2) on a cylinder R = 1, H = 0.5, bottom clamped, side
-    free.  3D P2 tets (h 0.025 under the patch) against axisymmetric P2 triangles (h 0.005):
-    the displacement under the load and the peak von Mises within 2 %."""
+    free.  3D P2 tets (gmsh, h 0.04 within 0.3 of the centre, 0.2 outside: 9,765 tets,
+    43,119 dofs; pyamg CG, about 70 s) against axisymmetric P2 triangles (h 0.005 within
+    0.3, 0.05 outside: 31,534 dofs, 7 s): the displacement on the axis within 1 % (measured
+    0.23 %), the peak von Mises on the axis within 3 % (measured 1.7 %, the 3D mesh's
+    error) at the same depth."""
     R, H, a, p0 = 1.0, 0.5, 0.2, 1e8
     press = smooth_patch(p0, a)
     ax = AxisymmetricFEMSubstrate(
         substrate_rz(radius=R, depth=H, h_fine=0.005, h_coarse=0.05, refine_radius=0.3),
         E, NU, 0.0, element="P2", clamps=["bottom"])
     rax = ax.solve(tractions={"top": lambda x: np.array([0 * x[0], -press(x[0])])})
-    mesh3 = load_mesh(cylinder_mesh(R, H, 0.025, 0.2, 0.3))
-    s3 = FEMSubstrate(mesh3, E, NU, 0.0, element="P2", clamps=["bottom"])
+    mesh3 = load_mesh(cylinder_mesh(R, H, 0.04, 0.2, 0.3))
+    s3 = FEMSubstrate(mesh3, E, NU, 0.0, element="P2", clamps=["bottom"], solver="cg-amg")
     r3 = s3.solve(tractions={"top": lambda x: np.array(
         [0 * x[0], 0 * x[0], -press(np.hypot(x[0], x[1]))])})
     # total load
@@ -392,11 +395,11 @@ def test_against_3d_substrate_under_a_pressure_patch():
     depths = np.array([0.0, 0.05, 0.1, 0.2])
     uz_ax = rax.probe(np.column_stack([0 * depths, -depths]))["u"][:, 1]
     uz_3d = r3.probe(np.column_stack([0 * depths, 0 * depths, -depths]))["u"][:, 2]
-    assert np.allclose(uz_3d, uz_ax, rtol=2e-2, atol=0)
+    assert np.allclose(uz_3d, uz_ax, rtol=1e-2, atol=0)
     # peak von Mises (under the centre, below the surface) on a line of probes
     zs = np.linspace(0.0, 0.4, 161)
     vm_ax = rax.probe(np.column_stack([0 * zs, -zs]))["von_mises"]
     vm_3d = r3.probe(np.column_stack([0 * zs, 0 * zs, -zs]))["von_mises"]
-    assert vm_3d.max() == pytest.approx(vm_ax.max(), rel=2e-2)
+    assert vm_3d.max() == pytest.approx(vm_ax.max(), rel=3e-2)
     assert zs[np.argmax(vm_3d)] == pytest.approx(zs[np.argmax(vm_ax)], abs=0.02)
     assert rax.peak_von_mises()[0] == pytest.approx(vm_ax.max(), rel=2e-2)
