@@ -181,3 +181,17 @@ def test_bad_sound_speed_names_the_key():
     d = _scene()
     d["materials"]["water"].update(c0="physical", sound_speed=-1.0)
     assert _error(d).key == "materials.water.sound_speed"
+
+
+def test_example_scene_with_tc_and_physical_c0():
+    """examples/droplet_impact/droplet_impact_physical_c0.toml: 4 tc = 8 us, c0 = 1480."""
+    from pathlib import Path
+
+    import coupling  # noqa: F401  (registers the coupling section)
+    from sphfem.scene import load_scene
+
+    root = Path(__file__).resolve().parents[1]
+    sc = load_scene(root / "examples" / "droplet_impact" / "droplet_impact_physical_c0.toml")
+    assert sc.time.t_end == pytest.approx(4 * 0.1e-3 / 50.0, rel=1e-15)
+    assert sc.output.every == pytest.approx(0.25 * 0.1e-3 / 50.0, rel=1e-15)
+    assert sc.materials["water"].c0 == 1480.0
