@@ -125,6 +125,6 @@ def test_tlsph_backend_from_the_factory_follows_the_protocol():
     sub = _backend("tlsph").sub
     be = make_backend("tlsph", substrate=sub, surface="top")
     assert isinstance(be, TLSPHBackend) and isinstance(be, SubstrateBackend)
-    assert be.surface_plane == (1, 0.0, -1) and sorted(BACKENDS) == ["fem", "tlsph"]
+    assert be.surface_plane == (1, 0.0, -1) and {"fem", "tlsph"} <= set(BACKENDS)
     with pytest.raises(ValueError, match="names box faces"):
         TLSPHBackend(sub, "roof")
