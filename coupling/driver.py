@@ -31,16 +31,12 @@ import logging
 import math
 import time
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 import numpy as np
 
 from coupling.sensors import SensorSet, Surface
 from sphfem.particles import FLUID, GHOST
 from sphfem.physics import PhysicsModule
-
-if TYPE_CHECKING:
-    from sphfem.simulation import Simulation
 
 logger = logging.getLogger(__name__)
 
@@ -338,6 +334,16 @@ def fluid_region_distance(ps, region_of, period=None, limit: float = np.inf) -> 
     return float(d.min())
 
 
+def fluid_c0(scene, materials) -> float | None:
+    """The speed of sound c0 [m/s] of the scene's fluid: that of the materials of its
+    fluid blocks (the fluid module requires one shared value; the largest is taken),
+    otherwise the largest c0 any material declares; None if none does."""
+    fluid = {b.material for b in scene.blocks if b.kind == "fluid"}
+    c0s = [m.c0 for name, m in materials.items() if name in fluid and m.c0]
+    c0s = c0s or [m.c0 for m in materials.values() if m.c0]
+    return max(c0s) if c0s else None
+
+
 class CouplingModule(PhysicsModule):
     """The ``coupling`` physics module: reads ``scene.coupling`` (see
     :mod:`coupling.scene_section`); list it after ``fluid`` and ``heat``."""
@@ -356,19 +362,19 @@ class CouplingModule(PhysicsModule):
         self.contact = None
         self.clearance0 = None
 
-    def init(self, sim) -> None:
+    def init(self, ctx) -> None:
         from coupling.backends import FEMBackend, TLSPHBackend
         from coupling.sensors import coupled_region
 
         sc, cfg = self.scene, self.cfg
         reg = coupled_region(sc, cfg)
         names, shapes, lo, hi, T0 = reg.names, reg.shapes, reg.lo, reg.hi, reg.T0
-        ps = sim.particles
+        ps = ctx.particles
         mats = [sc.material_index(cfg.material)]
         region_sel = SensorSet(shapes, mats, tol=1e-9 * float(np.max(hi - lo)))
         if cfg.backend == "fem":
             backend = FEMBackend(build_substrate(sc, cfg, lo, hi, T0), cfg.surface,
-                                 cfg.temperature_map, R=sim.R, kernel=sc.sph.kernel)
+                                 cfg.temperature_map, R=ctx.R, kernel=ctx.kernel)
         else:
             backend = TLSPHBackend.from_scene(sc, cfg, reg)
         plane = getattr(backend, "surface_plane", None)
@@ -376,7 +382,7 @@ class CouplingModule(PhysicsModule):
         if plane is not None:
             ax, value, inward = plane
             surface = Surface(ax, value, inward)
-        depth = cfg.sensor_depth if cfg.sensor_depth is not None else sim.R
+        depth = cfg.sensor_depth if cfg.sensor_depth is not None else ctx.R
         sensors = SensorSet(shapes, mats, surface=surface, depth=depth,
                             tol=region_sel.tol)
         probes = cfg.probes
@@ -394,60 +400,62 @@ class CouplingModule(PhysicsModule):
         self.sensor_count = int(sensors.sensor_mask(ps).sum())
         if "c_heat" in ps and np.all(ps.c_heat[region] > 0):
             self.ledger = HeatLedger(ps, region)
-        self._U, self._kappa = self._scales(sim, ps)
-        self._t_init = float(sim.t)
-        d0 = fluid_region_distance(ps, sensors.region_mask, sim.period)
-        self.clearance0 = d0 - sim.R if math.isfinite(d0) else None
-        if d0 < sim.R and sim.t > 0.0:  # resumed from a checkpoint past contact
-            self.contact = self._resumed_in_contact(sim.t)
-        elif d0 < sim.R:
-            self.contact = {"t_s": float(sim.t), "step": int(sim.step_count)}
+        self._U, self._kappa = self._scales(ctx, ps)
+        self._t_init = float(ctx.t)
+        d0 = fluid_region_distance(ps, sensors.region_mask, ctx.period)
+        self.clearance0 = d0 - ctx.R if math.isfinite(d0) else None
+        if d0 < ctx.R and ctx.t > 0.0:  # resumed from a checkpoint past contact
+            self.contact = self._resumed_in_contact(ctx.t)
+        elif d0 < ctx.R:
+            self.contact = {"t_s": float(ctx.t), "step": int(ctx.step)}
             logger.warning("coupling: fluid within the support radius of the substrate at the "
                            "start (t = %g s): the substrate is loaded before impact; place "
-                           "the fluid with [[blocks]] above/gap", sim.t)
-        self.driver.couple(ps, sim.t, sim.step_count, self._folder(sim))
+                           "the fluid with [[blocks]] above/gap", ctx.t)
+        self.driver.couple(ps, ctx.t, ctx.step, self._folder(ctx))
         logger.info("coupling: %d region particles, %d sensors, backend %s", self.region_count,
                     self.sensor_count, cfg.backend)
 
-    def _scales(self, sim, ps):
+    def _scales(self, ctx, ps):
+        """(U, kappa) of :func:`default_every_k`: U the largest of the fluid's initial speed
+        and c0 / 10 (None without fluid), kappa = k / (rho0 c) of the coupled material."""
         fl = ps.kind == FLUID
         U = float(np.sqrt((ps.v[fl] ** 2).sum(axis=1)).max()) if fl.any() and "v" in ps else 0.0
-        c0 = None
-        for m in sim.modules:
-            c0 = getattr(getattr(m, "params", None), "c0", None) or c0
-        if c0 is None:
-            c0s = [mat.c0 for mat in self.scene.materials.values() if mat.c0]
-            c0 = max(c0s) if c0s else None
+        c0 = fluid_c0(self.scene, ctx.materials)
         if fl.any() and c0:
             U = max(U, c0 / 10.0)
-        mat = self.scene.materials[self.cfg.material]
+        mat = ctx.materials[self.cfg.material]
         kappa = mat.k / (mat.rho0 * mat.c) if (mat.k and mat.c) else None
         return (U if fl.any() else None), kappa
 
-    def _folder(self, sim):
-        out = getattr(sim, "out", None)
-        return None if out is None else Path(out) / self.cfg.output
+    def _folder(self, ctx):
+        return None if ctx.out is None else Path(ctx.out) / self.cfg.output
 
-    def step(self, sim, dt: float) -> None:
+    def start(self, ctx) -> None:
+        """A fresh run starts: write the record of the state before the first step (the
+        solve of ``init``) into the output folder; a resumed run writes at its first solve."""
+        if ctx.step == 0 and self.driver.history and ctx.out is not None:
+            self.driver.write_history(self._folder(ctx))
+
+    def step(self, ctx, dt: float) -> None:
         if self.driver.every_k is None:
             self.driver.every_k = default_every_k(self.scene.sph.dx, dt, self._U, self._kappa)
             logger.info("coupling: one substrate solve every %d steps", self.driver.every_k)
         self.steps += 1
-        t_new = sim.t + dt
+        t_new = ctx.t + dt
         if self.contact is None and self.clearance0 is not None:
-            d = fluid_region_distance(sim.particles, self.driver.sensors.region_mask,
-                                      sim.period, limit=sim.R)
-            if d < sim.R and self.steps == 1 and sim.t > self._t_init:
-                self.contact = self._resumed_in_contact(sim.t)
-            elif d < sim.R:
-                self.contact = {"t_s": float(t_new), "step": int(sim.step_count + 1)}
+            d = fluid_region_distance(ctx.particles, self.driver.sensors.region_mask,
+                                      ctx.period, limit=ctx.R)
+            if d < ctx.R and self.steps == 1 and ctx.t > self._t_init:
+                self.contact = self._resumed_in_contact(ctx.t)
+            elif d < ctx.R:
+                self.contact = {"t_s": float(t_new), "step": int(ctx.step + 1)}
                 logger.info("coupling: first contact at t = %g s", t_new)
         tm = self.scene.time
         last = t_new >= tm.t_end * (1 - 1e-12) or (
-            tm.max_steps is not None and sim.step_count + 1 >= tm.max_steps)
-        self.driver.maybe_couple(sim.particles, t_new, self.steps, last, self._folder(sim))
+            tm.max_steps is not None and ctx.step + 1 >= tm.max_steps)
+        self.driver.maybe_couple(ctx.particles, t_new, self.steps, last, self._folder(ctx))
 
-    def diagnostics(self, sim) -> dict:
+    def diagnostics(self, ctx) -> dict:
         d = {"region_particles": self.region_count, "sensors": self.sensor_count,
              **self.driver.summary()}
         d["contact"] = self.contact_record()
@@ -458,8 +466,8 @@ class CouplingModule(PhysicsModule):
         if "last" in d and tc is not None:
             d["last"]["t_after_contact_s"] = d["last"]["t"] - tc
         if self.ledger is not None:
-            region = self.driver.sensors.region_mask(sim.particles)
-            d["heat"] = self.ledger.figures(sim.particles, region)
+            region = self.driver.sensors.region_mask(ctx.particles)
+            d["heat"] = self.ledger.figures(ctx.particles, region)
         return d
 
 
@@ -491,22 +499,4 @@ def default_probes(mesh, plane, region_lo, region_hi, fractions=(0.0, 0.125, 0.2
         p[ax] = value + inward * max(f * thick, 1e-6 * thick)
         pts.append(p)
     return np.array(pts)
-
-
-def run_scene(scene, out, progress: bool = False, source=None) -> tuple[Simulation, dict]:
-    """Build and run ``scene`` with the coupling's outputs in ``out``; return ``(sim,
-    summary)``: the finished :class:`sphfem.simulation.Simulation` (particles, modules) and
-    the summary dict also written to ``out/summary.json``.  The driver exposes its output
-    folder to modules as ``sim.out``."""
-    from sphfem.simulation import Simulation
-
-    out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
-    sim = Simulation(scene, source=source)
-    sim.out = out
-    coupling = next((m for m in sim.modules if m.name == "coupling"), None)
-    if coupling is not None and coupling.driver is not None and coupling.driver.history:
-        coupling.driver.write_history(out / coupling.cfg.output)
-    return sim, sim.run(out, progress=progress)
-
 

@@ -2,15 +2,20 @@
 
 A module is a small object that declares the per-particle fields it needs, initialises
 itself once the particles exist, reports its stable time step and advances the state by
-``dt``.  The registry maps the scene name to an import path, so that only the modules a
-scene lists are imported, built, allocated and stepped.
+``dt``; it sees the run through a narrow :class:`~sphfem.context.StepContext`, not the
+driver (docs/architecture.md).  The registry maps the scene name to an import path, so
+that only the modules a scene lists are imported, built, allocated and stepped.
 """
 
 from __future__ import annotations
 
 import importlib
+from typing import TYPE_CHECKING
 
 import numpy as np
+
+if TYPE_CHECKING:
+    from sphfem.particles import ParticleSet
 
 #: scene name -> "module.path:ClassName" (imported only when a scene names it)
 MODULES: dict[str, str] = {}
@@ -24,13 +29,24 @@ def register_physics(name: str, target: str) -> None:
 class PhysicsModule:
     """Base class of physics modules (heat conduction, WCSPH fluid, TL-SPH solid, ...).
 
-    Subclasses set ``name`` and override the hooks; the driver calls, in order,
-    ``fields`` (once, to allocate arrays), ``init`` (once), then each step
-    ``dt_limits`` and ``step``, and at the end ``diagnostics``.
+    Subclasses set ``name`` and override the hooks.  Every hook receives the run's
+    :class:`~sphfem.context.StepContext` (particles, neighbour list, kernel, domain, time,
+    output folder, materials), never the driver.  The driver calls, in order:
+
+    ``fields()``  once, to allocate the per-particle arrays;
+    ``init(ctx)``  once the particles and the first list exist (again after a resumed
+        checkpoint); it may return particles to append (kind GHOST, derived from the
+        others: a resumed run drops them and ``init`` places them anew);
+    ``appended(ctx, index)``  when ``init`` returned particles: the driver appended them
+        (now at ``index``) and rebuilt the list once;
+    ``start(ctx)``  when the run starts (``ctx.out`` is the output folder);
+    each step ``dt_limits(ctx)``, then ``step(ctx, dt)`` with ``ctx.t`` the time at the
+    start of the step; ``reorder(ctx, perm)`` after a cell sort; ``diagnostics(ctx)``.
     """
 
     name = "base"
-    #: True if the module moves particles (the neighbour list is then rebuilt every step)
+    #: True if the module moves particles (the driver then keeps a Verlet-skin list and
+    #: checks it before each step; inside its step the module asks ``ctx.neighbors()``)
     moves_particles = False
 
     def __init__(self, scene):
@@ -40,25 +56,33 @@ class PhysicsModule:
         """Per-particle arrays this module needs: name -> (dtype, components)."""
         return {}
 
-    def init(self, sim) -> None:
-        """Deferred initialisation, after particles and the neighbour list exist."""
+    def init(self, ctx) -> ParticleSet | None:
+        """Deferred initialisation, after particles and the neighbour list exist; return
+        the particles to append (kind GHOST) or None."""
+        return None
 
-    def dt_limits(self, sim) -> dict[str, float]:
+    def appended(self, ctx, index: np.ndarray) -> None:
+        """The particles ``init`` returned are appended at ``index``; the list is rebuilt."""
+
+    def start(self, ctx) -> None:
+        """The run starts: ``ctx.out`` is the output folder (write the initial records)."""
+
+    def dt_limits(self, ctx) -> dict[str, float]:
         """Named stable-time-step limits in seconds (e.g. {"thermal": 1e-6})."""
         return {}
 
-    def step(self, sim, dt: float) -> None:
+    def step(self, ctx, dt: float) -> None:
         """Advance this module's state by ``dt``."""
         raise NotImplementedError
 
-    def reorder(self, sim, perm: np.ndarray) -> None:
+    def reorder(self, ctx, perm: np.ndarray) -> None:
         """The driver permuted every particle field (new index k holds old ``perm[k]``).
 
-        Modules keep per-particle state in ``sim.particles`` only; a module that caches
+        Modules keep per-particle state in ``ctx.particles`` only; a module that caches
         particle indices (ghost sources, say) remaps them here.
         """
 
-    def diagnostics(self, sim) -> dict:
+    def diagnostics(self, ctx) -> dict:
         """JSON-serialisable figures for summary.json (fallback counts, energy drift, ...)."""
         return {}
 

@@ -13,14 +13,18 @@ import logging
 import platform
 import sys
 import time
+from contextlib import nullcontext
 from pathlib import Path
 
 import numpy as np
 from numba import njit
 
 from sphfem import __version__, kernels
+from sphfem.context import StepContext
+from sphfem.errors import SimulationStopped
 from sphfem.neighbors import build_neighbor_list, cell_sort_permutation, min_image
 from sphfem.output import ParticleSeries, atomic_write_bytes, write_json
+from sphfem.particles import GHOST
 from sphfem.physics import build_modules
 from sphfem.progress import StageLog, peak_rss_mb, process_s, say, stage
 
@@ -72,17 +76,16 @@ def _release_free_memory() -> None:
         pass
 
 
-class SimulationStopped(Exception):
-    """A stability guard stopped the run (the last state was written before raising)."""
+__all__ = ["Simulation", "SimulationStopped", "format_summary"]  # SimulationStopped: errors
 
 
 class Simulation:
     """A scene's particles, kernel, neighbour list and physics modules.
 
-    Attributes used by modules: ``particles`` (:class:`~sphfem.particles.ParticleSet`),
-    ``nbrs`` (:class:`~sphfem.neighbors.NeighborList`), ``R`` (support radius), ``sigma``,
-    ``kind`` (kernel code), ``period`` (periodic lengths, 0 = open), ``lo``/``hi`` (domain),
-    ``t``, ``step_count``, ``scene``.
+    The modules see the run through ``ctx`` (:class:`~sphfem.context.StepContext`), never
+    through this object; ``particles``, ``nbrs``, ``nbrs_version``, ``t`` and
+    ``step_count`` read the context.  ``R`` (support radius), ``sigma``, ``kernel_code``,
+    ``period`` (periodic lengths, 0 = open), ``lo``/``hi`` (domain), ``scene``.
     """
 
     def __init__(self, scene, source: str | None = None, particles=None):
@@ -100,26 +103,25 @@ class Simulation:
         self.source = source
         self.dim = scene.dim
         self.R = scene.sph.support_factor * scene.sph.dx
-        self.kind = kernels.kernel_code(scene.sph.kernel)
-        self.sigma = kernels.kernel_sigma(self.kind, self.dim, self.R)
+        self.kernel_code = kernels.kernel_code(scene.sph.kernel)
+        self.sigma = kernels.kernel_sigma(self.kernel_code, self.dim, self.R)
         self.lo = np.asarray(scene.domain.lo, dtype=np.float64)
         self.hi = np.asarray(scene.domain.hi, dtype=np.float64)
         self.period = np.where(scene.domain.periodic, self.hi - self.lo, 0.0)
         if particles is None:
             with stage("building particles"):
                 particles = build_particles(scene)
-        self.particles = particles
         self.modules = build_modules(scene)
         for mod in self.modules:
             for name, (dtype, ncomp) in mod.fields().items():
-                self.particles.add_field(name, ncomp, dtype)
-        self.t = 0.0
-        self.step_count = 0
-        self.steps_above_limit = 0
-        self.nbrs = None
-        self.nbrs_version = 0
-        self._earlier = None  # a resumed run: step, time and seconds before this process
+                particles.add_field(name, ncomp, dtype)
         self.moving = any(m.moves_particles for m in self.modules)
+        self.ctx = StepContext(particles, self.R, self.sigma, self.kernel_code,
+                               scene.sph.kernel, self.lo, self.hi, self.period,
+                               scene.materials, moving=self.moving,
+                               provide=self._provide_neighbors)
+        self.steps_above_limit = 0
+        self._earlier = None  # a resumed run: step, time and seconds before this process
         skin = scene.sph.skin
         self.skin = (0.15 if self.moving else 0.0) if skin is None else skin
         self.sort_every = scene.sph.sort_every
@@ -129,14 +131,66 @@ class Simulation:
         with stage(f"first neighbour list ({self.particles.n} particles)"):
             self._sort_by_cell()
             self.update_neighbors()
-        for mod in self.modules:
-            with stage(f"setting up {mod.name}"):
-                mod.init(self)
+        self._init_modules(stages=True)
         logger.info("scene %s: %d particles, dim %d, kernel %s, R = %g m, modules %s",
                     getattr(scene, "name", "?"), self.particles.n, self.dim, scene.sph.kernel,
                     self.R, [m.name for m in self.modules])
 
+    # -- the context's state -------------------------------------------------------------
+    @property
+    def particles(self):
+        return self.ctx.particles
+
+    @property
+    def nbrs(self):
+        return self.ctx.nbrs
+
+    @property
+    def nbrs_version(self) -> int:
+        return self.ctx.nbrs_version
+
+    @property
+    def t(self) -> float:
+        return self.ctx.t
+
+    @t.setter
+    def t(self, value: float) -> None:
+        self.ctx.t = value
+
+    @property
+    def step_count(self) -> int:
+        return self.ctx.step
+
+    @step_count.setter
+    def step_count(self, value: int) -> None:
+        self.ctx.step = value
+
+    def _init_modules(self, stages: bool = False) -> None:
+        """``init`` every module in scene order; append the particles a module returns
+        (kind GHOST), rebuild the list once and call its ``appended`` hook."""
+        ctx = self.ctx
+        for mod in self.modules:
+            with stage(f"setting up {mod.name}") if stages else nullcontext():
+                extra = mod.init(ctx)
+                if extra is None or extra.n == 0:
+                    continue
+                if np.any(extra.kind != GHOST):
+                    raise ValueError(f"{mod.name}: init returned particles that are not "
+                                     "ghosts (kind GHOST); only derived particles can be "
+                                     "appended, the scene's blocks make the others")
+                start = ctx.particles.n
+                ctx.particles.append(extra)
+                self.update_neighbors()
+                mod.appended(ctx, np.arange(start, start + extra.n))
+
     # -- neighbours -----------------------------------------------------------------------
+    def _provide_neighbors(self, rebuild: bool) -> None:
+        """The context's list service (:meth:`StepContext.neighbors`)."""
+        if rebuild:
+            self.update_neighbors()
+        else:
+            self.ensure_neighbors()
+
     def _sort_by_cell(self) -> np.ndarray:
         perm = cell_sort_permutation(self.particles.x, self.R, self.lo, self.hi, self.period)
         self.particles.reorder(perm)
@@ -146,11 +200,11 @@ class Simulation:
         """Rebuild the neighbour list now (listing pairs within (1 + skin) R)."""
         t0 = time.perf_counter()
         x = self.particles.x
-        self.nbrs = build_neighbor_list(x, self.R * (1.0 + self.skin), self.lo, self.hi,
-                                        self.period)
+        self.ctx.nbrs = build_neighbor_list(x, self.R * (1.0 + self.skin), self.lo,
+                                            self.hi, self.period)
         self._x_at_build = x.copy()
         self.rebuilds += 1
-        self.nbrs_version += 1
+        self.ctx.nbrs_version += 1
         self.wall["neighbors"] += time.perf_counter() - t0
 
     def ensure_neighbors(self) -> bool:
@@ -170,15 +224,15 @@ class Simulation:
                 perm = self._sort_by_cell()
                 self.wall["neighbors"] += time.perf_counter() - t0
                 for mod in self.modules:
-                    mod.reorder(self, perm)
+                    mod.reorder(self.ctx, perm)
             self.update_neighbors()
             return True
         return False
+
     @property
     def kernel_args(self) -> tuple:
-        """(x, vol, offsets, indices, R, sigma, kind, period): the operators' common tail."""
-        p, nl = self.particles, self.nbrs
-        return (p.x, p.vol, nl.offsets, nl.indices, self.R, self.sigma, self.kind, self.period)
+        """(x, vol, offsets, indices, R, sigma, kernel_code, period): the operators' tail."""
+        return self.ctx.kernel_args
 
     # -- time stepping --------------------------------------------------------------------
     def stable_dt(self) -> tuple[float, str]:
@@ -190,7 +244,7 @@ class Simulation:
         """
         limits = {}
         for mod in self.modules:
-            for k, v in mod.dt_limits(self).items():
+            for k, v in mod.dt_limits(self.ctx).items():
                 limits[f"{mod.name}.{k}"] = v
         fixed = self.scene.time.dt
         if fixed is not None and not self.scene.time.cap_dt:
@@ -209,7 +263,7 @@ class Simulation:
             self.ensure_neighbors()
         for mod in self.modules:
             t0 = time.perf_counter()
-            mod.step(self, dt)
+            mod.step(self.ctx, dt)
             self.wall[mod.name] += time.perf_counter() - t0
         self.t += dt
         self.step_count += 1
@@ -248,7 +302,7 @@ class Simulation:
     def _run(self, out: Path, progress, resume, keep_checkpoint, run0) -> dict:
         from tqdm import tqdm
 
-        self.out = out  # modules that write their own files (the coupling) look here
+        self.ctx.out = out  # modules that write their own files (the coupling) look here
         t_end = self.scene.time.t_end
         max_steps = self.scene.time.max_steps
         every = self.scene.output.every
@@ -263,6 +317,8 @@ class Simulation:
             series.entries = self._series_entries
         else:
             series.write(self.t, self.particles, fields)
+        for mod in self.modules:
+            mod.start(self.ctx)
         next_out = self.t + every if every else np.inf
         dts, limiter_counts = [], {}
         limit_min = np.inf  # smallest step the limits allowed (before output/end truncation)
@@ -361,7 +417,7 @@ class Simulation:
                    "steps_above_stable_limit": self.steps_above_limit},
             "neighbors": {"pairs": self.nbrs.n_pairs, "mean_per_particle": self.nbrs.n_pairs / n
                           if n else 0.0},
-            "diagnostics": {m.name: m.diagnostics(self) for m in self.modules},
+            "diagnostics": {m.name: m.diagnostics(self.ctx) for m in self.modules},
         }
 
     def save_checkpoint(self, path: Path, series: ParticleSeries) -> None:
@@ -394,9 +450,11 @@ class Simulation:
                    for k in ("setup_s", "wall_s", "total_s")}
             acc["processes"] = int(z["acc_processes"]) if "acc_processes" in z.files else 1
         self._earlier = {"t": self.t, "step": self.step_count, **acc}
+        ps = self.particles
+        if np.any(ps.kind == GHOST):  # derived particles: the modules place them anew
+            self.ctx.particles = ps.select(ps.kind != GHOST)
         self.update_neighbors()
-        for mod in self.modules:
-            mod.init(self)
+        self._init_modules()
 
 
 def format_summary(summary: dict, out) -> str:

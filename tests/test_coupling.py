@@ -279,10 +279,11 @@ def test_heat_lost_by_the_fluid_is_gained_by_the_solid(tmp_path, cache):
     """Hot water block on an alumina block, insulated box (no ghosts, Cleary form): the
     coupling's ledger balances to round-off, the substrate is solved every 3 steps with
     the mapped temperatures, and the outputs land in <out>/substrate."""
-    from coupling.driver import run_scene
+    from sphfem.api import run
     from sphfem.scene import parse_scene_toml
 
-    sim, summary = run_scene(parse_scene_toml(HOT), tmp_path / "out")
+    res = run(parse_scene_toml(HOT), tmp_path / "out")
+    summary = res.summary
     d = summary["diagnostics"]["coupling"]
     q = d["heat"]
     assert q["heat_lost_by_fluid_J"] > 0.1  # a sizeable exchange (J per m of depth)

@@ -150,7 +150,7 @@ def test_droplet_scenes_start_clear_of_the_substrate(name):
 
 
 def test_no_load_before_contact_and_contact_time(tmp_path, cache):
-    from coupling.driver import run_scene
+    from sphfem.api import run
 
     gap = 1.2 * R
     t_end = 1.2 * gap / SPEED
@@ -161,7 +161,8 @@ def test_no_load_before_contact_and_contact_time(tmp_path, cache):
     t_pred = ballistic_contact_time(ps0.x[fl], ps0.x[~fl], u, R)
     assert 0.0 < t_pred < t_end
 
-    sim, summary = run_scene(scene, tmp_path / "out")
+    res = run(scene, tmp_path / "out")
+    summary = res.summary
     c = summary["diagnostics"]["coupling"]
     dt_max = summary["dt"]["max"]
     # the substrate carries no load at t = 0, nor at any solve before contact: no force at

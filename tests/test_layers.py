@@ -1,7 +1,7 @@
 """Package layers (issue 15, docs: DESIGN.md "Layers"): ``coupling`` depends on ``sphfem``,
 never the reverse, and every module of both packages imports on its own.
 
-Three checks:
+Four checks:
 
 * static -- no source file of ``sphfem`` names the ``coupling`` package for import: an
   ``import coupling...`` / ``from coupling... import`` statement anywhere (module level or
@@ -9,6 +9,8 @@ Three checks:
   ``coupling`` name, or a module-level constant listing it among package names;
 * static -- no import cycles among the modules of both packages, counting every import a
   file makes (inside functions too: a deferred import only hides a cycle);
+* static -- only the driver layer (``DRIVER_LAYER``) imports the driver,
+  ``sphfem.simulation``; physics modules see the run through ``sphfem.context``;
 * at run time -- each module is imported alone in a fresh child process (forked from one
   interpreter that holds only the third-party libraries), which must succeed; a ``sphfem``
   module must leave ``coupling`` out of ``sys.modules``.
@@ -261,7 +263,8 @@ def test_the_cycle_check_sees_deferred_relative_and_named_imports():
     assert import_cycles(graph) == [["p.a", "p.b", "p.c"], ["p.d", "p.e"]]
 
 
-def test_no_import_cycles():
+def package_files() -> dict[str, tuple[str, bool]]:
+    """Every module of sphfem and coupling: dotted name -> (source, is_package)."""
     files = {}
     for pkg in (sphfem, coupling):
         base = Path(pkg.__file__).resolve().parent
@@ -270,9 +273,53 @@ def test_no_import_cycles():
             is_package = parts[-1] == "__init__"
             files[".".join(parts[:-1] if is_package else parts)] = (
                 path.read_text(encoding="utf-8"), is_package)
-    graph = import_graph(files)
+    return files
+
+
+def test_no_import_cycles():
+    graph = import_graph(package_files())
     cycles = import_cycles(graph)
     shown = ["; ".join(f"{m} -> {', '.join(sorted(graph[m] & set(c)))}" for m in c)
              for c in cycles]
     assert cycles == [], "import cycles (move the shared piece to a module both import):\n" \
         + "\n".join(shown)
+
+
+#: the driver layer: the modules that build and run a whole scene (the driver itself, the
+#: library facade and command line built on it, the validation and benchmark cases that
+#: run scenes, the numba warm-up that runs a coarsened scene).  Only these may import
+#: ``sphfem.simulation``; every physics module, the coupling included, sees the run
+#: through ``sphfem.context.StepContext`` and takes its exceptions from ``sphfem.errors``.
+DRIVER_LAYER = ("sphfem.simulation", "sphfem.api", "sphfem.cli", "sphfem.validation",
+                "sphfem.bench", "sphfem.jit_warmup", "coupling.validation")
+
+
+def _in_driver_layer(module: str) -> bool:
+    return any(module == d or module.startswith(d + ".") for d in DRIVER_LAYER)
+
+
+def test_only_the_driver_layer_imports_the_driver():
+    """Rule (issue 15): no module of sphfem or coupling outside ``DRIVER_LAYER`` imports
+    ``sphfem.simulation``, at module level or inside a function (imports under ``if
+    TYPE_CHECKING:`` do not run and are allowed); ``sphfem.errors`` and
+    ``sphfem.context``, which every layer imports, import no sphfem module at run time
+    except the neighbour search the context builds a list with when no driver is there."""
+    graph = import_graph(package_files())
+    assert "sphfem.simulation" in graph["sphfem.api"]  # the check sees a real import
+    offenders = sorted(m for m, deps in graph.items()
+                       if "sphfem.simulation" in deps and not _in_driver_layer(m))
+    assert offenders == [], f"import sphfem.simulation outside the driver layer: {offenders}"
+    assert graph["sphfem.errors"] == set(), graph["sphfem.errors"]
+    assert graph["sphfem.context"] <= {"sphfem.neighbors"}, graph["sphfem.context"]
+
+
+def test_the_driver_rule_sees_deferred_imports():
+    files = {"sphfem.simulation": ("", False),
+             "sphfem.heat.module": ("def f():\n    from sphfem.simulation import S\n", False),
+             "sphfem.api": ("import sphfem.simulation\n", False),
+             "sphfem.solid.module": ("from typing import TYPE_CHECKING\nif TYPE_CHECKING:\n"
+                                     "    from sphfem.simulation import S\n", False)}
+    graph = import_graph(files)
+    users = sorted(m for m, deps in graph.items() if "sphfem.simulation" in deps)
+    assert users == ["sphfem.api", "sphfem.heat.module"]
+    assert [m for m in users if not _in_driver_layer(m)] == ["sphfem.heat.module"]

@@ -53,11 +53,11 @@ class Drift(PhysicsModule):
     moves_particles = True
     velocity = np.array([37.0, -21.0])
 
-    def dt_limits(self, sim):
-        return {"drift": 0.5 * sim.R / np.linalg.norm(self.velocity)}
+    def dt_limits(self, ctx):
+        return {"drift": 0.5 * ctx.R / np.linalg.norm(self.velocity)}
 
-    def step(self, sim, dt):
-        x = sim.particles.x
+    def step(self, ctx, dt):
+        x = ctx.particles.x
         x += dt * self.velocity
         np.mod(x, 1.0, out=x)
 

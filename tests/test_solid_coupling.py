@@ -17,11 +17,12 @@ SCENE = (
 
 
 def test_coupled_run_with_the_tlsph_substrate(tmp_path, monkeypatch):
-    from coupling.driver import run_scene
+    from sphfem.api import run
     from sphfem.scene import parse_scene_toml
 
     monkeypatch.setenv("SPHFEM_CACHE", str(tmp_path / "cache"))
-    sim, summary = run_scene(parse_scene_toml(SCENE), tmp_path / "out")
+    res = run(parse_scene_toml(SCENE), tmp_path / "out")
+    summary = res.summary
     d = summary["diagnostics"]["coupling"]
     b = d["backend"]
     assert b["backend"] == "tlsph" and b["B0_fallbacks"] == 0

@@ -146,7 +146,7 @@ def _verlet_run(perm_at=None, steps=60, hourglass=10.0):
             perm = rng.permutation(sim.particles.n)
             sim.particles.reorder(perm)
             for m in sim.modules:
-                m.reorder(sim, perm)
+                m.reorder(sim.ctx, perm)
             sim.update_neighbors()
         sim.step(dt)
     return sim, mod
@@ -159,13 +159,13 @@ def test_verlet_energy_and_reorder():
     bounded).  Permuting the particle set mid-run (the driver's cell sort) changes nothing:
     the reference data follow through tl_id."""
     sim, mod = _verlet_run(hourglass=0.0)
-    d = mod.diagnostics(sim)
+    d = mod.diagnostics(sim.ctx)
     e = d["energy"]
     assert e["kinetic_J"] > 0.05 * e["strain_J"] > 0 and e["hourglass_J"] == 0.0
     assert e["max_abs_drift_J"] < 1e-3 * e["strain_J"]
     assert d["explicit_stable_dt_s"] == pytest.approx(0.8 * 2 / d["omega_max_rad_s"])
     sim, mod = _verlet_run()
-    assert mod.diagnostics(sim)["energy"]["hourglass_J"] > 0
+    assert mod.diagnostics(sim.ctx)["energy"]["hourglass_J"] > 0
     sim2, _ = _verlet_run(perm_at=25)
     a = sim.particles
     b = sim2.particles
@@ -229,7 +229,7 @@ def test_example_bar_heated_runs(tmp_path):
     dt, name = sim.stable_dt()
     assert dt == 5.0
     sim.step(dt)
-    d = sim.modules[1].diagnostics(sim)
+    d = sim.modules[1].diagnostics(sim.ctx)
     assert d["relax_residual"] <= 1e-6 and d["held_components"] == 60
     T = sim.particles.T[sim.particles.tl_id > 0]
     assert T.max() > 330.0 and sim.particles.von_mises.max() > 1e7

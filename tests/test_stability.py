@@ -84,12 +84,12 @@ def _poison_class():
     class _Poison(PhysicsModule):
         name = "poison"
 
-        def dt_limits(self, sim):
+        def dt_limits(self, ctx):
             return {"poison": 1e-3}
 
-        def step(self, sim, dt):
-            if sim.step_count == 3:
-                sim.particles.T[5] = np.nan
+        def step(self, ctx, dt):
+            if ctx.step == 3:
+                ctx.particles.T[5] = np.nan
 
     return _Poison
 
@@ -130,13 +130,13 @@ def _nan_writer_class():
 
         name = "nanwriter"
 
-        def dt_limits(self, sim):
+        def dt_limits(self, ctx):
             return {"nanwriter": 1e-3}
 
-        def step(self, sim, dt):
-            if sim.step_count == 2:
-                (sim.out / "extra").mkdir(exist_ok=True)
-                (sim.out / "extra" / "probes.csv").write_text("t,T\n0.0,300.0\n0.002,nan\n")
+        def step(self, ctx, dt):
+            if ctx.step == 2:
+                (ctx.out / "extra").mkdir(exist_ok=True)
+                (ctx.out / "extra" / "probes.csv").write_text("t,T\n0.0,300.0\n0.002,nan\n")
 
     return _NanWriter
 

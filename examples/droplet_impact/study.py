@@ -56,13 +56,12 @@ MATERIALS = {  # substrate materials for the sweep (rho0, c, k, E, nu, alpha)
 
 
 def run_case(data: dict, out: Path, source: str = "<study>") -> dict:
-    import coupling  # noqa: F401  (registers the coupling module)
-    from coupling.driver import run_scene
+    from sphfem.api import run
     from sphfem.scene import parse_scene
 
     scene = parse_scene(data, source=source)
     t0 = time.perf_counter()
-    sim, summary = run_scene(scene, out, progress=True, source=source)
+    summary = run(scene, out, progress=True).summary
     summary["study_wall_s"] = time.perf_counter() - t0
     return summary
 

@@ -37,6 +37,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from sphfem.errors import SimulationStopped
 from sphfem.particles import SOLID
 from sphfem.physics import PhysicsModule
 
@@ -84,12 +85,12 @@ class TLSPHModule(PhysicsModule):
             out[name] = sel
         return out
 
-    def init(self, sim) -> None:
+    def init(self, ctx) -> None:
         from sphfem.solid.body import SolidBody
         from sphfem.solid.constitutive import lame
 
         sc, cfg = self.scene, self.cfg
-        ps = sim.particles
+        ps = ctx.particles
         self.block_names = (list(cfg.blocks) if cfg.blocks is not None else
                             [b.name for b in sc.blocks if b.kind == "solid"])
         members = self._block_members(ps)
@@ -119,7 +120,7 @@ class TLSPHModule(PhysicsModule):
         body = SolidBody(X0, ps.vol[idx], ps.rho[idx], lam, mu, alpha, self.dx,
                          theta0=ps.T_ref[idx].copy(),
                          support_factor=sc.sph.support_factor,
-                         kernel=sc.sph.kernel, period=sim.period,
+                         kernel=sc.sph.kernel, period=ctx.period,
                          hourglass=cfg.hourglass, damping=cfg.damping)
         body.x[:] = ps.x[idx]
         body.v[:] = ps.v[idx]
@@ -134,7 +135,7 @@ class TLSPHModule(PhysicsModule):
                       "relax_residual": None, "peak_von_mises_Pa": 0.0,
                       "peak_von_mises_t": 0.0}
         body.a = body.accelerations()
-        self._write(ps, sim.t)
+        self._write(ps, ctx.t)
         self.energy0 = self._energy()
         self.max_drift = 0.0
 
@@ -188,17 +189,17 @@ class TLSPHModule(PhysicsModule):
             self._idx, self._tl_arr = idx, tl
         return self._idx
 
-    def reorder(self, sim, perm) -> None:
+    def reorder(self, ctx, perm) -> None:
         """The driver permuted the particles: remap the body -> particle index map (the
         reference neighbour list is in body order and stays valid)."""
         new_of_old = np.empty_like(perm)
         new_of_old[perm] = np.arange(perm.shape[0])
         self._idx = new_of_old[self._idx]
-        self._tl_arr = sim.particles.tl_id
+        self._tl_arr = ctx.particles.tl_id
         assert np.array_equal(self._tl_arr[self._idx], np.arange(1, self.body.n + 1))
 
     # -- stepping ------------------------------------------------------------------------
-    def dt_limits(self, sim) -> dict[str, float]:
+    def dt_limits(self, ctx) -> dict[str, float]:
         cfg = self.cfg
         if cfg.integrator == "verlet":
             return {"explicit": self.dt_explicit}
@@ -208,8 +209,7 @@ class TLSPHModule(PhysicsModule):
             return {"trapezoid": self.dt_explicit}
         return {"quasi_static": self.scene.time.t_end}
 
-    def step(self, sim, dt: float) -> None:
-        from sphfem.simulation import SimulationStopped
+    def step(self, ctx, dt: float) -> None:
         from sphfem.solid.integrate import (
             SolidConvergenceError,
             relax,
@@ -218,7 +218,7 @@ class TLSPHModule(PhysicsModule):
         )
 
         cfg, body = self.cfg, self.body
-        ps = sim.particles
+        ps = ctx.particles
         idx = self._index(ps)
         body.x[:] = ps.x[idx]
         body.v[:] = ps.v[idx]
@@ -229,7 +229,7 @@ class TLSPHModule(PhysicsModule):
         elif cfg.integrator == "trapezoid":
             try:
                 info = trapezoid_step(body, dt, tol=cfg.tol, max_iter=cfg.max_iter,
-                                      step_index=sim.step_count)
+                                      step_index=ctx.step)
                 st["iterations"] += info["iterations"]
                 st["max_iterations"] = max(st["max_iterations"], info["iterations"])
             except SolidConvergenceError as e:
@@ -249,14 +249,14 @@ class TLSPHModule(PhysicsModule):
             st["relax_residual"] = info["residual"]
             if not info["converged"]:
                 raise SimulationStopped(
-                    f"tlsph: dynamic relaxation at step {sim.step_count} did not converge: "
+                    f"tlsph: dynamic relaxation at step {ctx.step} did not converge: "
                     f"residual {info['residual']:.3g} > relax_tol {cfg.relax_tol:g} after "
                     f"{info['steps']} steps (raise [tlsph] relax_max_steps, or check for "
                     "an unsupported body under a net load)")
         st["steps"] += 1
         ps.x[idx] = body.x
         ps.v[idx] = body.v
-        self._write(ps, sim.t + dt)
+        self._write(ps, ctx.t + dt)
         e = self._energy()
         self.max_drift = max(self.max_drift, abs(e["total_J"] - self.energy0["total_J"]))
 
@@ -282,10 +282,10 @@ class TLSPHModule(PhysicsModule):
         return {"kinetic_J": kin, "strain_J": strain, "hourglass_J": hg,
                 "external_potential_J": ext, "total_J": kin + strain + hg + ext}
 
-    def diagnostics(self, sim) -> dict:
+    def diagnostics(self, ctx) -> dict:
         b = self.body
         e = self._energy()
-        vm = sim.particles.von_mises[self._index(sim.particles)]
+        vm = ctx.particles.von_mises[self._index(ctx.particles)]
         scale = max(abs(self.energy0["total_J"]), e["strain_J"], e["kinetic_J"], 1e-300)
         return {
             "integrator": self.cfg.integrator,
