@@ -12,6 +12,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit, prange
 
+from sphfem.errors import SimulationStopped
 from sphfem.particles import FLUID
 
 
@@ -66,8 +67,6 @@ def check_fluid(x, v, rho, kind, lo, hi, period, c0, rho0, max_speed_factor, rho
            rho_ratio_band[0] * rho0, rho_ratio_band[1] * rho0, flags)
     if not flags.any():
         return
-    from sphfem.simulation import SimulationStopped
-
     fl = kind == FLUID
     parts = []
     for bit in (1, 2, 4, 8):

@@ -309,9 +309,9 @@ class FluidSolver:
     Neighbours: stand-alone (``sim=None``) the solver keeps its own Verlet list (radius
     R (1 + skin), cell sort every ``sort_every`` rebuilds), built directly as the filtered
     view (pair filter of the search).  Driven by a
-    :class:`~sphfem.simulation.Simulation` (``sim`` given) it uses the driver's shared list
-    ``sim.nbrs``: after its half drift it calls ``sim.ensure_neighbors()`` and, whenever
-    ``sim.nbrs_version`` changed, derives its filtered view (:func:`passes.filter_rows`).
+    driver (``sim``: the run's :class:`~sphfem.context.StepContext`) it uses the shared list
+    ``sim.nbrs``: after its half drift it asks ``sim.neighbors()`` for a valid list and,
+    whenever ``sim.nbrs_version`` changed, derives its filtered view (:func:`passes.filter_rows`).
     Both paths run the same passes on the same filtered view.
     """
 
@@ -443,7 +443,7 @@ class FluidSolver:
     def _after_drift(self) -> None:
         """Make the list valid for the current (half-drifted) positions."""
         if self.sim is not None:
-            self.sim.ensure_neighbors()
+            self.sim.neighbors()
             self._sync_neighbors()
             return
         if self.params.skin <= 0:
@@ -691,56 +691,56 @@ class FluidModule(PhysicsModule):
         return {k: (np.float64, dim if nc == "dim" else nc)
                 for k, nc in fluid_fields(self.params).items()}
 
-    def init(self, sim) -> None:
-        ps = sim.particles
+    def init(self, ctx) -> None:
+        ps = ctx.particles
         fl = ps.kind == FLUID
-        names = list(sim.scene.materials)
-        if not isinstance(getattr(sim.scene, "fluid", None), FluidParams):
-            visc = sim.scene.fluid is None or sim.scene.fluid.viscosity != "none"
-            for name in fluid_materials(sim.scene):
+        names = list(self.scene.materials)
+        if not isinstance(getattr(self.scene, "fluid", None), FluidParams):
+            visc = self.scene.fluid is None or self.scene.fluid.viscosity != "none"
+            for name in fluid_materials(self.scene):
                 sel = fl & (ps.material == names.index(name))
-                ps.mu[sel] = (sim.scene.materials[name].mu or 0.0) if visc else 0.0
-        if self.packing_report is None and sim.step_count == 0 and sim.t == 0.0:
-            self._pack(sim)
-        self.solver = FluidSolver(ps, sim.R, sim.lo, sim.hi, sim.period, self.params,
-                                  kernel=sim.scene.sph.kernel, sim=sim)
-        self.solver.t = sim.t  # a resumed run keeps its body-force ramp
-        self.solver.step_count = sim.step_count
+                ps.mu[sel] = (self.scene.materials[name].mu or 0.0) if visc else 0.0
+        if self.packing_report is None and ctx.step == 0 and ctx.t == 0.0:
+            self._pack(ctx)
+        self.solver = FluidSolver(ps, ctx.R, ctx.lo, ctx.hi, ctx.period, self.params,
+                                  kernel=self.scene.sph.kernel, sim=ctx)
+        self.solver.t = ctx.t  # a resumed run keeps its body-force ramp
+        self.solver.step_count = ctx.step
 
-    def _pack(self, sim) -> None:
+    def _pack(self, ctx) -> None:
         """``[fluid.packing]``: relax the fluid particles against the walls (once, before
         the first step; :func:`sphfem.fluid.packing.pack`), then rebuild the list."""
-        cfg = getattr(sim.scene, "fluid", None)
+        cfg = getattr(self.scene, "fluid", None)
         pk = getattr(cfg, "packing", None) if not isinstance(cfg, FluidParams) else None
         if pk is None or pk.iterations <= 0:
             return
         from sphfem.fluid.packing import pack
 
-        ps = sim.particles
+        ps = ctx.particles
         fl = ps.kind == FLUID
         wall = ps.kind == WALL
-        dx = sim.scene.sph.dx
-        x, rep = pack(ps.x[fl], ps.x[wall], dx, sim.R, sim.lo, sim.hi, sim.period,
+        dx = self.scene.sph.dx
+        x, rep = pack(ps.x[fl], ps.x[wall], dx, ctx.R, ctx.lo, ctx.hi, ctx.period,
                       vol_fixed=ps.vol[wall], iterations=pk.iterations, tol=pk.tolerance,
-                      jitter=pk.jitter, seed=pk.seed, kernel=sim.scene.sph.kernel)
+                      jitter=pk.jitter, seed=pk.seed, kernel=self.scene.sph.kernel)
         ps.x[fl] = x
         self.packing_report = rep
         logger.info("fluid packing: %d iterations, residual %.3g (tolerance %.3g), largest "
                     "shift %.3g dx", rep.iterations, rep.residual, pk.tolerance,
                     rep.max_shift_over_dx)
-        sim.update_neighbors()
+        ctx.neighbors(rebuild=True)  # the packed positions
 
-    def dt_limits(self, sim) -> dict[str, float]:
+    def dt_limits(self, ctx) -> dict[str, float]:
         return self.solver.dt_limits()
 
-    def step(self, sim, dt: float) -> None:
+    def step(self, ctx, dt: float) -> None:
         self.solver.step(dt)
         self.solver.check()
 
-    def reorder(self, sim, perm) -> None:
+    def reorder(self, ctx, perm) -> None:
         self.solver.reorder(perm)
 
-    def diagnostics(self, sim) -> dict:
+    def diagnostics(self, ctx) -> dict:
         out = self.solver.diagnostics()
         if self.packing_report is not None:
             out["packing"] = self.packing_report.to_dict()
