@@ -140,3 +140,10 @@ def test_max_spreading_over_frames_and_from_files(tmp_path):
     again = sp.max_spreading(sp.read_frames(tmp_path), D=0.1, wall_level=0.0, dx=dx)
     np.testing.assert_allclose(again.diameters, s.diameters, rtol=1e-12)
     np.testing.assert_allclose(again.times, s.times, rtol=1e-12)
+
+
+def test_disc_spread_ratio_by_hand():
+    # pi D^3 / 6 = pi D_disc^2 h / 4 with h = D / 12: D_disc^2 = 8 D^2 -> 2.828427
+    assert sp.disc_spread_ratio(1.0 / 12.0) == pytest.approx(math.sqrt(8.0), rel=1e-12)
+    # beta = 6 needs h = 2 D / (3 * 36) = D / 54
+    assert sp.disc_spread_ratio(1.0 / 54.0) == pytest.approx(6.0, rel=1e-12)

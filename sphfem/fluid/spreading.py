@@ -82,6 +82,16 @@ def effective_reynolds(v: float, D: float, nu: float, nu_art: float = 0.0) -> fl
     return v * D / (nu + nu_art)
 
 
+def disc_spread_ratio(h_over_D):
+    """D_disc / D of the droplet's volume spread as a flat disc of thickness h:
+    pi D^3 / 6 = pi D_disc^2 h / 4  ->  D_disc / D = sqrt(2 D / (3 h)).
+
+    With h the thinnest lamella a particle method can hold (about one spacing dx), this
+    bounds the spreading it can show: sqrt(2 (D / dx) / 3), e.g. 2.83 at D / dx = 12; the
+    correlations' beta_max = 6 needs h = D / 54."""
+    return np.sqrt(2.0 / (3.0 * np.asarray(h_over_D, float)))
+
+
 # --------------------------------------------------------------------------------------
 # correlations
 
