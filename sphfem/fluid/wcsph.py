@@ -14,12 +14,13 @@ with the renormalised density gradient (fluid-fluid pairs).  Walls: Adami, Hu & 
 force [N] it receives from the fluid (pressure + viscous pair forces), the exact negative of
 what the fluid feels from it.
 
-Time integration: symplectic position Verlet in the predictor-corrector form of DualSPHysics
-(Gomez-Gesteira et al. 2012), one force evaluation per step, second order:
-
-    x* = x + dt/2 v,  v* = v + dt/2 a,  rho* = rho + dt/2 Drho      (a, Drho of the last step)
-    a, Drho = forces(x*, v*, rho*)
-    v' = v + dt a,  rho' = rho + dt Drho,  x' = x* + dt/2 v'
+Methods are chosen by name from the registries of :mod:`sphfem.fluid` (``[fluid]`` keys):
+``pressure`` (:mod:`~sphfem.fluid.pressure`; "wcsph", the above, owns the step),
+``integrator`` (:mod:`~sphfem.fluid.integrators`; "symplectic": position Verlet in the
+predictor-corrector form of DualSPHysics, one force evaluation per step, second order),
+``walls`` (:mod:`~sphfem.fluid.walls`; "adami2012"), ``viscosity``
+(:mod:`~sphfem.fluid.viscosity`; "laminar": the term above, fused into the force pass) and
+``surface_tension`` (:mod:`~sphfem.fluid.surface_tension`).
 
 Time-step limits (h = R/2), each reported by name: acoustic ``cfl h / (c0 + |v|max)``,
 viscous ``visc_cfl h^2 min(rho/mu)``, force ``force_cfl sqrt(h / |a|max)``.
@@ -35,17 +36,27 @@ from __future__ import annotations
 import logging
 import math
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, make_dataclass
+from typing import Any
 
 import numba
 import numpy as np
 from numba import njit, prange
 
 from sphfem import kernels
-from sphfem.fluid import passes, surface, surface_tension
+from sphfem.fluid import (
+    integrators,
+    passes,
+    pressure,
+    surface,
+    surface_tension,
+    viscosity,
+    walls,
+)
 from sphfem.fluid.eos import tait_B
 from sphfem.fluid.guards import check_fluid
-from sphfem.fluid.walls_adami2012 import adami_wall_state
+from sphfem.fluid.scene_section import FLUID as FLUID_SECTION
+from sphfem.fluid.scene_section import REGISTRIES
 from sphfem.neighbors import (
     NeighborList,
     build_neighbor_list,
@@ -79,97 +90,82 @@ class _threads:
             numba.set_num_threads(self.old)
 
 
-@dataclass
-class FluidParams:
-    """Parameters of the WCSPH fluid (SI units).
+#: the parameters of :class:`FluidParams` that are not ``[fluid]`` keys: the fluid
+#: materials' properties and the ``[time]`` / ``[sph]`` settings (name -> (default, doc);
+#: :func:`params_from_scene` fills them from the scene)
+RUN_FIELDS = {
+    "rho0": (1000.0, "reference density [kg/m^3] (the fluid materials' rho0)"),
+    "c0": (10.0, "numerical speed of sound [m/s] (>= 10 |v|max and >= 10 sqrt(g H))"),
+    "mu": (1.0e-3, "dynamic viscosity [Pa s] given to fluid particles whose mu field is 0"),
+    "sigma": (0.0, "physical surface tension [N/m] (calibrates the model's constant)"),
+    "cfl": (0.25, "coefficient of the acoustic time-step limit ([time] cfl)"),
+    "skin": (0.15, "Verlet-list skin as a fraction of R ([sph] skin)"),
+    "sort_every": (10, "cell-sort the particles every this many list builds ([sph] "
+                       "sort_every)"),
+}
 
-    rho0       reference density [kg/m^3]
-    c0         numerical speed of sound [m/s] (>= 10 |v|max and >= 10 sqrt(g H))
-    gamma      Tait exponent [-]
-    mu         dynamic viscosity [Pa s] given to fluid particles whose ``mu`` field is 0
-    delta      delta-SPH diffusion coefficient [-] (0: off)
-    alpha      artificial viscosity coefficient [-] of the delta-SPH momentum equation
-               (Monaghan 1992 / Marrone et al. 2011; 0: off, 0.01-0.05 for free-surface
-               flows at high Reynolds number), added to the laminar viscosity
-    gravity    body force per unit mass [m/s^2], one entry per axis
-    gravity_ramp  time [s] over which the body force rises smoothly from 0 (half a sine
-               period); lets a column at rest settle without exciting its acoustic modes
-    cfl, visc_cfl, force_cfl   coefficients of the three time-step limits [-]
-    eps_visc   viscous regulariser as a fraction of h^2 [-]
-    skin       Verlet-list skin as a fraction of R [-]
-    sort_every cell-sort the particles every this many neighbour rebuilds
-    cond_max   largest accepted condition number of the renormalisation matrix
-    max_speed_factor   guard: stop if a fluid speed exceeds this multiple of c0
-    rho_ratio_band     guard: stop if rho/rho0 leaves this interval
-    threads    numba threads for the fluid passes (0: automatic -- one thread below
-               ``SERIAL_BELOW`` particles, where thread start-up costs more than it saves,
-               numba's default above)
-    surface_tension  "none" or a method of the registry :mod:`sphfem.fluid.surface_tension`:
-               "csf" (continuum surface force, recommended;
-               :mod:`~sphfem.fluid.surface_tension_csf`), "iif" (Park 2019 eq. 2.78;
-               :mod:`~sphfem.fluid.surface_tension_iif_tartakovsky2005`) or "akinci"
-               (:mod:`~sphfem.fluid.surface_tension_akinci2013`)
-    sigma      physical surface tension [N/m] (calibrates the model's constant)
-    iif_s      IIF calibration constant s [N] (None: from sigma)
-    akinci_gamma  Akinci coefficient [m^(dim+1)/(kg s^2)] (None: from sigma)
-    st_params  the surface-tension method's own ``[fluid]`` keys (name -> value; a method
-               without a field here reads its keys from this dict)
-    shifting   "none", "interior" (only particles away from the free surface) or "all"
-               (free-surface and near-surface particles shifted tangentially)
-    shifting_coef  A of dr = -A h |v| dt grad C [-]
-    detect_free_surface  run the Marrone et al. (2010) detection (always on with shifting);
-               the flag is the particle field ``free_surface``
-    """
 
-    rho0: float = 1000.0
-    c0: float = 10.0
-    gamma: float = 7.0
-    mu: float = 1.0e-3
-    delta: float = 0.1
-    alpha: float = 0.0
-    gravity: tuple = (0.0, 0.0)
-    gravity_ramp: float = 0.0
-    cfl: float = 0.25
-    visc_cfl: float = 0.125
-    force_cfl: float = 0.25
-    eps_visc: float = 1e-3
-    skin: float = 0.15
-    sort_every: int = 10
-    cond_max: float = 1e8
-    max_speed_factor: float = 1.0
-    rho_ratio_band: tuple = (0.8, 1.25)
-    threads: int = 0
-    surface_tension: str = "none"
-    sigma: float = 0.0
-    iif_s: float | None = None
-    akinci_gamma: float | None = None
-    st_params: dict = field(default_factory=dict)
-    shifting: str = "none"
-    shifting_coef: float = 5.0 / 3.0
-    detect_free_surface: bool = False
+def _field_default(p):
+    """A ``[fluid]`` key's default as a :class:`FluidParams` default: a per-axis default
+    (a function of the dimension in the declaration) becomes (), padded with zeros by the
+    solver."""
+    return () if callable(p.default) else p.default
 
-    def __post_init__(self):
-        for k in ("rho0", "c0", "gamma"):
-            if not getattr(self, k) > 0:
-                raise ValueError(f"fluid {k} must be positive, got {getattr(self, k)}")
-        if self.mu < 0 or self.delta < 0 or self.skin < 0 or self.alpha < 0:
-            raise ValueError("fluid mu, delta, alpha and skin must be non-negative")
-        lo, hi = self.rho_ratio_band
-        if not 0 < lo < 1 < hi:
-            raise ValueError(f"rho_ratio_band must satisfy 0 < lo < 1 < hi, got {(lo, hi)}")
-        method = surface_tension.lookup(self.surface_tension)  # ValueError if unknown
-        if self.shifting not in ("none", "interior", "all"):
-            raise ValueError(f"unknown shifting mode {self.shifting!r}")
-        if method is not None:
-            key = method.constant_key
-            const = self.st_params.get(key, getattr(self, key, None)) if key else None
-            if const is None and not self.sigma > 0:
-                raise ValueError(f"surface_tension = {self.surface_tension!r} needs sigma > 0 "
-                                 "[N/m] or its calibration constant")
 
-    @property
-    def uses_free_surface(self) -> bool:
-        return self.detect_free_surface or self.shifting != "none"
+def _check_params(self) -> None:
+    """Check the values against the ``[fluid]`` declaration (bounds, choices, the method
+    names of the registries) and the cross-key rules."""
+    for k in ("rho0", "c0"):
+        if not getattr(self, k) > 0:
+            raise ValueError(f"fluid {k} must be positive, got {getattr(self, k)}")
+    if self.mu < 0 or self.skin < 0:
+        raise ValueError("fluid mu and skin must be non-negative")
+    for q in FLUID_SECTION.params:
+        v = getattr(self, q.name)
+        if q.name in REGISTRIES:
+            REGISTRIES[q.name].lookup(v)  # ValueError for an unknown method
+        elif q.choices is not None and v not in q.choices:
+            raise ValueError(f"unknown fluid {q.name} {v!r}; known: {', '.join(q.choices)}")
+        elif q.type in (float, int) and v is not None and not q.in_range(v):
+            raise ValueError(f"fluid {q.name} must be {q.expectation()}, got {v!r}")
+    lo, hi = self.rho_ratio_band
+    if not 0 < lo < 1 < hi:
+        raise ValueError(f"rho_ratio_band must satisfy 0 < lo < 1 < hi, got {(lo, hi)}")
+    method = surface_tension.lookup(self.surface_tension)
+    if method is not None:
+        key = method.constant_key
+        const = self.st_params.get(key, getattr(self, key, None)) if key else None
+        if const is None and not self.sigma > 0:
+            raise ValueError(f"surface_tension = {self.surface_tension!r} needs sigma > 0 "
+                             "[N/m] or its calibration constant")
+
+
+def _make_fluid_params():
+    """:class:`FluidParams`, a dataclass with one field per ``[fluid]`` key (name and default
+    from :data:`sphfem.fluid.scene_section.FLUID`), the :data:`RUN_FIELDS` and
+    ``st_params``."""
+    rows = [(k, d, doc) for k, (d, doc) in RUN_FIELDS.items()]
+    rows += [(q.name, _field_default(q), q.doc) for q in FLUID_SECTION.params]
+    fields = [(k, Any, field(default=d)) for k, d, _ in rows]
+    fields.append(("st_params", dict, field(default_factory=dict)))
+    doc = ("Parameters of the WCSPH fluid (SI units): the ``[fluid]`` keys of the scene "
+           "(declared in :mod:`sphfem.fluid.scene_section`, documented in docs/scenes.md) "
+           "and the materials' and run settings.\n\n"
+           + "\n".join(f"{k}: {doc}" for k, _, doc in rows)
+           + "\nst_params: the surface-tension method's own keys not declared above "
+             "(name -> value)")
+    cls = make_dataclass("FluidParams", fields, namespace={
+        "__doc__": doc,
+        "__post_init__": _check_params,
+        "uses_free_surface": property(
+            lambda self: self.detect_free_surface or self.shifting != "none",
+            doc="the free surface is detected (flag or shifting)"),
+    })
+    cls.__module__ = __name__
+    return cls
+
+
+FluidParams = _make_fluid_params()
 
 
 #: per-particle fields of the fluid (name -> (dtype, components or "dim"))
@@ -206,34 +202,6 @@ def _max_disp_sq(x, xref, v, half_dt, kind, period):
             s += d * d
         out[i] = s
     return out.max() if n else 0.0
-
-
-@njit(cache=True, parallel=True, fastmath=FASTMATH)
-def _predict(x, v, rho, acc, drho, kind, dt, v_n, rho_n):
-    n, dim = x.shape
-    h = 0.5 * dt
-    for i in prange(n):
-        if kind[i] != FLUID:
-            continue
-        rho_n[i] = rho[i]
-        rho[i] += h * drho[i]
-        for k in range(dim):
-            v_n[i, k] = v[i, k]
-            x[i, k] += h * v[i, k]
-            v[i, k] += h * acc[i, k]
-
-
-@njit(cache=True, parallel=True, fastmath=FASTMATH)
-def _correct(x, v, rho, acc, drho, kind, dt, v_n, rho_n):
-    n, dim = x.shape
-    h = 0.5 * dt
-    for i in prange(n):
-        if kind[i] != FLUID:
-            continue
-        rho[i] = rho_n[i] + dt * drho[i]
-        for k in range(dim):
-            v[i, k] = v_n[i, k] + dt * acc[i, k]
-            x[i, k] += h * v[i, k]
 
 
 @njit(cache=True, parallel=True)
@@ -293,6 +261,7 @@ class _Scratch:
         self.fs = np.zeros(n, dtype=np.int8)
         self.near = np.zeros(n, dtype=np.bool_)
         self.P = np.zeros((n, passes.NPACK))
+        self.mu0 = np.zeros(n)  # the fused pass's mu when the viscosity model has its own
         self.cnt = np.zeros(n, dtype=np.int64)
         self.ok = np.ones(n, dtype=np.bool_)
 
@@ -334,9 +303,17 @@ class FluidSolver:
         self.gravity = g
         self.B = tait_B(self.params.rho0, self.params.c0, self.params.gamma)
         add_fluid_fields(particles, self.params)
+        self.pressure_method = pressure.lookup(self.params.pressure)
+        self.integrator = integrators.lookup(self.params.integrator)
+        self.wall_method = walls.lookup(self.params.walls)
+        self.visc_method = viscosity.lookup(self.params.viscosity)
+        self._visc_state = None  # work arrays of a viscosity model with its own pass
         mu = particles.mu
         fl = particles.kind == FLUID
-        mu[fl & (mu == 0.0)] = self.params.mu
+        if self.visc_method is None:  # inviscid
+            mu[fl] = 0.0
+        else:
+            mu[fl & (mu == 0.0)] = self.params.mu
         self.m_bar = float(particles.m[fl].mean()) if fl.any() else 1.0
         self._surface_constants()
         self.max_shift = 0.0
@@ -440,7 +417,7 @@ class FluidSolver:
         elif self._scratch is None or self._scratch.n != self.p.n:
             self._scratch = _Scratch(self.p.n, self.dim)
 
-    def _after_drift(self) -> None:
+    def after_drift(self) -> None:
         """Make the list valid for the current (half-drifted) positions."""
         if self.sim is not None:
             self.sim.neighbors()
@@ -478,8 +455,7 @@ class FluidSolver:
         p, s, pa, nl = self.p, self._scratch, self.params, self.nbrs
         g = self.body_force(self.t if t is None else t)
         passes.prepare_fluid(p.rho, p.m, p.v, p.kind, pa.rho0, self.B, pa.gamma, p.p, s.vg)
-        adami_wall_state(p.x, p.v, p.rho, p.p, p.acc, p.kind, nl.offsets, nl.indices, self.R,
-                         self.kernel_code, self.period, g, pa.rho0, self.B, pa.gamma, s.vg)
+        self.wall_method.wall_state(self, g)  # the registered wall model
         passes.prepare_all(p.rho, p.p, p.m, p.vol, p.kind, s.pr, s.V, s.meff, s.isf)
         delta_coef = pa.delta * self.h * pa.c0
         nb, cnt = self._nb, s.cnt  # in-range rows (fluid-owned buffer, shared list untouched)
@@ -493,10 +469,14 @@ class FluidSolver:
                                 cnt)
         if not self.compact_rows:  # reference path: the full view (tests, profiling)
             nb, cnt = nl.indices, np.diff(nl.offsets)
-        passes.pack_rows(p.x, p.v, s.vg, p.rho, s.pr, s.V, s.meff, s.isf, p.mu, s.grad, s.P)
+        fused_mu = p.mu if self.visc_method is None or self.visc_method.fused else s.mu0
+        passes.pack_rows(p.x, p.v, s.vg, p.rho, s.pr, s.V, s.meff, s.isf, fused_mu, s.grad,
+                         s.P)
         passes.fluid_forces(s.P, p.kind, nl.offsets, cnt, nb, self.R, self.sigma,
                             self.kernel_code, self.period, g, pa.eps_visc * self.h * self.h,
                             delta_coef, pa.alpha * self.h * pa.c0, p.acc, p.drho, p.f_fluid)
+        if self.visc_method is not None and not self.visc_method.fused:  # its own pass
+            self._visc_state = self.visc_method.accelerate(self, self._visc_state)
         if self.st_method is not None:  # the registered method (sphfem.fluid.surface_tension)
             self._st_state = self.st_method.accelerate(self, self._st_state)
         if pa.uses_free_surface:
@@ -530,22 +510,17 @@ class FluidSolver:
         return lim[name], name
 
     def step(self, dt: float) -> None:
-        """One symplectic position-Verlet step of length ``dt`` (see the module docstring)."""
+        """One step of length ``dt`` of the pressure model (``[fluid] pressure``; for
+    "wcsph" the ``[fluid] integrator``), then particle shifting."""
         with _threads(self.nthreads):
             self._step(dt)
 
     def _step(self, dt: float) -> None:
         if self.sim is not None:
             self._sync_neighbors()
+        self.pressure_method.advance(self, dt)
         p, s = self.p, self._scratch
         t0 = time.perf_counter()
-        _predict(p.x, p.v, p.rho, p.acc, p.drho, p.kind, dt, s.v_n, s.rho_n)
-        self.wall["integrate"] += time.perf_counter() - t0
-        self._after_drift()
-        self.evaluate(self.t + 0.5 * dt)
-        p, s = self.p, self._scratch
-        t0 = time.perf_counter()
-        _correct(p.x, p.v, p.rho, p.acc, p.drho, p.kind, dt, s.v_n, s.rho_n)
         if self.params.shifting != "none":
             surface.shift(p.x, p.v, p.rho, p.kind, s.gc, s.nrm, s.near, s.grad,
                           self.params.shifting_coef * self.h, dt, 0.1 * self.h,
