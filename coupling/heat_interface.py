@@ -53,7 +53,8 @@ of the resolved field.  Nothing in (4) is fitted: it is (1) read through the par
 cell averages, so it is exact for the two semi-infinite bodies at any spacing, and it
 hands over to the resolved conduction as the layer outgrows the particles.  Over a step
 the layer's 1/sqrt(t) is integrated exactly: h_a uses the step mean
-2 (sqrt(t_w + dt) - sqrt(t_w)) / dt of 1/sqrt(t) and Phi at mid-step.
+2 (sqrt(t_w + dt) - sqrt(t_w)) / dt of 1/sqrt(t) and Phi at the start of the step (the
+state of the particles' temperatures it reads; Phi(0) = 1).
 
 Conservation
 ------------
@@ -114,7 +115,8 @@ def contact_solution(t, T_f, T_s, k_f, rho_f, c_f, k_s, rho_s, c_s):
     Ti = (ef * T_f + es * T_s) / (ef + es)
     t = np.asarray(t, float)
     C = ef * es * (T_f - T_s) / ((ef + es) * math.sqrt(math.pi))
-    return Ti, C / np.sqrt(t), 2.0 * C * np.sqrt(t)
+    with np.errstate(divide="ignore"):
+        return Ti, C / np.sqrt(t), 2.0 * C * np.sqrt(t)
 
 
 class ContactHeatInterface:
@@ -152,6 +154,7 @@ class ContactHeatInterface:
         if self.period[self.axis] > 0:
             raise ValueError("ContactHeatInterface: the wall-normal axis cannot be periodic")
         self.n_gauss = int(n_gauss)
+        self._shape = _SurfaceShape(substrate, self.axis)
         self._slo = self.X.min(axis=0)
         self._shi = self.X.max(axis=0)
         self._eps = 1e-9 * float(np.max(np.ptp(self.X, axis=0)))
@@ -162,6 +165,7 @@ class ContactHeatInterface:
         self.heat_from_fluid = 0.0        #: sum of the particles' dE [J]
         self.steps = 0
         self.last: dict = {}
+        self._cache = None
 
     # -- sampling -----------------------------------------------------------------------
     def weights(self, x, vol, h=None):
@@ -211,7 +215,7 @@ class ContactHeatInterface:
         if P.shape[0] == 0:
             e = np.zeros(0)
             return (e.astype(np.int64), e.astype(np.int64), e, np.zeros(nX, bool), z, h)
-        N = self.sub.basis.probes(P.T).tocsr()[:, self.sub.surface_dofs].tocoo()
+        N = self._shape(P[:, lat])
         # B_ai = int_{footprint i} N_a dS
         B = sp.coo_matrix((N.data * meas[N.row], (N.col, part[N.row])),
                           shape=(nX, n)).tocsr()
@@ -227,11 +231,14 @@ class ContactHeatInterface:
     # -- one coupling step ---------------------------------------------------------------
     def conductance(self, t_w, dt, rows, cols, w, z, h, n_nodes):
         """h_a of eq. (4) [W/(m^2 K)] per node for layer ages ``t_w`` at the start of the
-        step (step mean of 1/sqrt(t), Phi at mid-step)."""
-        s_mid = np.sqrt(self.alpha_f * (t_w + 0.5 * dt))
+        step: the exact step mean of the similarity flux for the fluid state at the start
+        of the step, k_f / (sqrt(pi alpha_f) Phi_a(s_n)) * 2 (sqrt(t_w + dt) - sqrt(t_w)) / dt,
+        since T_inf - T_wall = (T_f,a - T_wall) / Phi_a(s_n) holds for the particles'
+        temperatures T_f,a at the start (eq. 3) and stays constant in the ideal contact."""
+        s_n = np.sqrt(self.alpha_f * t_w)
         a = np.maximum(z[cols] - 0.5 * h[cols], 0.0)
         b = np.maximum(z[cols] + 0.5 * h[cols], a + 1e-12 * h[cols])
-        phi = np.bincount(rows, weights=w * cell_mean_erf(a, b, s_mid[rows]),
+        phi = np.bincount(rows, weights=w * cell_mean_erf(a, b, s_n[rows]),
                           minlength=n_nodes)
         mean_inv_sqrt = 2.0 * (np.sqrt(t_w + dt) - np.sqrt(t_w)) / dt
         with np.errstate(divide="ignore"):
@@ -244,7 +251,17 @@ class ContactHeatInterface:
         whose temperature it advances (one :meth:`TransientHeat.step`).  Returns the heat
         each particle loses [J] (eq. 5): apply it as T_i -= dE_i / (m_i c_i)."""
         T = np.asarray(T, float)
-        rows, cols, w, wet, z, hh = self.weights(x, vol, h)
+        key = (np.array(x, float, copy=True), np.array(vol, float, ndmin=1, copy=True),
+               None if h is None else np.array(h, float, ndmin=1, copy=True))
+        c = self._cache
+        if c is not None and all(
+                (a is None and b is None) or (a is not None and b is not None
+                                              and a.shape == b.shape and np.array_equal(a, b))
+                for a, b in zip(key, c[0], strict=True)):
+            rows, cols, w, wet, z, hh = c[1]  # particles unchanged: the same weights
+        else:
+            rows, cols, w, wet, z, hh = self.weights(x, vol, h)
+            self._cache = (key, (rows, cols, w, wet, z, hh))
         nX = self.X.shape[0]
         newly = wet & np.isnan(self.t_wet)
         self.t_wet[newly] = self.t
@@ -274,3 +291,69 @@ class ContactHeatInterface:
                                 / max(abs(self.heat_to_substrate), 1e-300)),
                 "wetted_nodes": self.last.get("wetted", 0),
                 "substrate_factorisations": self.sub.factorisations}
+
+
+class _SurfaceShape:
+    """Values of the substrate's surface basis functions (P1 / Q1: one dof per node) at
+    points of the planar flux group, given by their lateral coordinates: hat functions on
+    the sorted surface nodes (2D / axisymmetric meshes), linear shape functions on the
+    surface triangles (3D; quadrilateral facets split in two, which keeps the partition
+    of unity).  Returns a COO matrix (points x surface dofs)."""
+
+    def __init__(self, sub, axis: int):
+        mesh = sub.mesh
+        if sub.basis.N != mesh.nvertices:
+            raise ValueError("ContactHeatInterface: the substrate needs a P1/Q1 element "
+                             "(one dof per node)")
+        nodes = np.asarray(sub.surface_dofs)
+        self.n = nodes.size
+        pos = np.full(mesh.nvertices, -1, np.int64)
+        pos[nodes] = np.arange(self.n)
+        lat = [a for a in range(mesh.p.shape[0]) if a != axis]
+        self.dim_lat = len(lat)
+        if self.dim_lat == 1:
+            c = mesh.p[lat[0], nodes]
+            order = np.argsort(c)
+            self.c = c[order]
+            self.idx = order
+            return
+        from skfem import MeshTri1
+
+        fac = pos[mesh.facets[:, mesh.boundaries[sub.flux_group]]]
+        pl = mesh.p[np.ix_(lat, nodes)]
+        if fac.shape[0] == 3:
+            tri = fac
+        else:  # quadrilaterals: order the corners around the centre, then split
+            cen = pl[:, fac].mean(axis=1)
+            ang = np.arctan2(pl[1, fac] - cen[1], pl[0, fac] - cen[0])
+            q = np.take_along_axis(fac, np.argsort(ang, axis=0), axis=0)
+            tri = np.hstack([q[[0, 1, 2]], q[[0, 2, 3]]])
+        self.tri = tri
+        self.pl = pl
+        self.finder = MeshTri1(pl, tri).element_finder()
+
+    def __call__(self, Y):
+        import scipy.sparse as sp
+
+        Y = np.atleast_2d(np.asarray(Y, float))
+        m = Y.shape[0]
+        if self.dim_lat == 1:
+            y = Y[:, 0]
+            i = np.clip(np.searchsorted(self.c, y), 1, self.c.size - 1)
+            c0, c1 = self.c[i - 1], self.c[i]
+            t = np.clip((y - c0) / (c1 - c0), 0.0, 1.0)
+            rows = np.concatenate([np.arange(m), np.arange(m)])
+            cols = np.concatenate([self.idx[i - 1], self.idx[i]])
+            vals = np.concatenate([1.0 - t, t])
+        else:
+            e = self.finder(Y[:, 0], Y[:, 1])
+            v = self.pl[:, self.tri[:, e]]  # (2, 3, m)
+            d1, d2 = v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]
+            r = Y.T - v[:, 0]
+            det = d1[0] * d2[1] - d1[1] * d2[0]
+            l1 = (r[0] * d2[1] - r[1] * d2[0]) / det
+            l2 = (d1[0] * r[1] - d1[1] * r[0]) / det
+            rows = np.tile(np.arange(m), 3)
+            cols = self.tri[:, e].ravel()
+            vals = np.concatenate([1.0 - l1 - l2, l1, l2])
+        return sp.coo_matrix((vals, (rows, cols)), shape=(m, self.n))

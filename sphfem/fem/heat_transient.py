@@ -145,6 +145,7 @@ class TransientHeat:
         if not 0.5 <= theta <= 1.0:
             raise ValueError(f"TransientHeat: theta must lie in [0.5, 1], got {theta}")
         self.mesh = mesh
+        self.flux_group = flux_group
         self.k, self.rho, self.c = float(k), float(rho), float(c)
         self.alpha = self.k / (self.rho * self.c)
         self.axisymmetric = axisymmetric
@@ -343,7 +344,8 @@ def ierfc(x):
     from scipy.special import erfc
 
     x = np.asarray(x, float)
-    return np.exp(-x * x) / math.sqrt(math.pi) - x * erfc(x)
+    xs = np.minimum(x, 26.0)  # ierfc(26) < 1e-296: beyond, 0 (and no inf * 0)
+    return np.where(x < 26.0, np.exp(-xs * xs) / math.sqrt(math.pi) - xs * erfc(xs), 0.0)
 
 
 def semi_infinite_flux(z, t, q, k, alpha):
