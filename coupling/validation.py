@@ -248,3 +248,6 @@ def shear_transfer_case(quick: bool = False) -> CaseResult:
     return CaseResult("shear-transfer", runs, criteria, notes, resolution_label="dx/H",
                       extra_columns={"steps": "steps", "probe_err": "probe err",
                                      "force_residual": "F resid", "drift": "drift"})
+
+
+from coupling import validation_contact_heat  # noqa: E402,F401  (registers contact-heat, issue 16)
