@@ -20,10 +20,11 @@ def cloud(dim, n_side=9, perturb=0.25, seed=0, periodic=False):
     lo = np.zeros(dim) if periodic else x.min(0) - R
     hi = np.ones(dim) if periodic else x.max(0) + R
     nl = build_neighbor_list(np.ascontiguousarray(x), R, lo, hi, period)
-    kind = K.kernel_code("wendland_c2")
-    sigma = K.kernel_sigma(kind, dim, R)
+    kernel_code = K.kernel_code("wendland_c2")
+    sigma = K.kernel_sigma(kernel_code, dim, R)
     vol = np.full(x.shape[0], dx**dim)
-    return np.ascontiguousarray(x), (x, vol, nl.offsets, nl.indices, R, sigma, kind, period), nl
+    args = (x, vol, nl.offsets, nl.indices, R, sigma, kernel_code, period)
+    return np.ascontiguousarray(x), args, nl
 
 
 @pytest.mark.parametrize("dim", [1, 2, 3])
@@ -61,13 +62,13 @@ def plain_lattice_factor(dim: int, R_over_dx: float = 3.0) -> float:
     quadrature at fixed R/dx: the factor does not tend to 1 as dx -> 0."""
     dx = 1.0
     R = R_over_dx * dx
-    kind = K.kernel_code("wendland_c2")
-    sigma = K.kernel_sigma(kind, dim, R)
+    kernel_code = K.kernel_code("wendland_c2")
+    sigma = K.kernel_sigma(kernel_code, dim, R)
     m = int(np.ceil(R_over_dx))
     pts = np.stack(np.meshgrid(*[np.arange(-m, m + 1)] * dim, indexing="ij"), -1)
     r = np.linalg.norm(pts.reshape(-1, dim), axis=1) * dx
     r = r[(r > 0) & (r < R)]
-    dw = np.array([K.kernel_dwdr(s, R, sigma, kind) for s in r])
+    dw = np.array([K.kernel_dwdr(s, R, sigma, kernel_code) for s in r])
     return float(np.sum(dx**dim * r * np.abs(dw)) / dim)
 
 
@@ -149,9 +150,10 @@ def test_singular_corrections_fall_back_and_are_counted():
     x = np.ascontiguousarray(np.vstack([block, line, iso]))
     R = 0.3
     nl = build_neighbor_list(x, R, x.min(0) - R, x.max(0) + R, np.zeros(2))
-    kind = 0
-    sigma = K.kernel_sigma(kind, 2, R)
-    args = (x, np.full(x.shape[0], 0.01), nl.offsets, nl.indices, R, sigma, kind, np.zeros(2))
+    kernel_code = K.kernel_code("wendland_c2")
+    sigma = K.kernel_sigma(kernel_code, 2, R)
+    args = (x, np.full(x.shape[0], 0.01), nl.offsets, nl.indices, R, sigma, kernel_code,
+            np.zeros(2))
     w, ok = op.laplacian_weights_corrected(*args)
     B, okb = op.renormalisation_matrix(*args)
     assert ok[:36].all() and okb[:36].all()
