@@ -20,13 +20,19 @@ plane), not their ring volumes.
 ``CoupledResult.cell_volume`` holds the ring volumes 2 pi int r dr dz of the cells, so
 ``mean_stress`` is the volume average over the body of revolution; stress tensors are in
 the (r, z, theta) order of the substrate (index 2 is the hoop direction).
+
+Registration.  Importing this module adds ``"fem-axisymmetric"`` to
+:data:`coupling.backends.BACKENDS` (so :func:`coupling.backends.make_backend` builds it).
+``coupling.backends`` cannot import this module itself: the class subclasses its
+:class:`~coupling.backends.FEMBackend`, and the import would be a cycle; the code that
+selects the backend (the driver) imports this module.
 """
 
 from __future__ import annotations
 
 import numpy as np
 
-from coupling.backends import FEMBackend
+from coupling.backends import BACKENDS, FEMBackend
 
 __all__ = ["AxisymmetricFEMBackend"]
 
@@ -61,3 +67,6 @@ class AxisymmetricFEMBackend(FEMBackend):
         d = super().diagnostics()
         d.update(backend=self.name, force_convention=self.force_convention)
         return d
+
+
+BACKENDS["fem-axisymmetric"] = AxisymmetricFEMBackend

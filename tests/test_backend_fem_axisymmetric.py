@@ -5,6 +5,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from coupling.backend_fem_axisymmetric import AxisymmetricFEMBackend
 from coupling.backends import BACKENDS, make_backend
 from sphfem.fem.axisymmetric import AxisymmetricFEMSubstrate, substrate_rz
 
@@ -27,7 +28,7 @@ def substrate(**kw):
 
 
 def test_registered():
-    assert "fem-axisymmetric" in BACKENDS
+    assert BACKENDS["fem-axisymmetric"] is AxisymmetricFEMBackend  # by importing its module
     with pytest.raises(TypeError, match="AxisymmetricFEMSubstrate"):
         from sphfem.fem import FEMSubstrate
         from sphfem.fem.meshing import substrate_rect
