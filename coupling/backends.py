@@ -346,9 +346,3 @@ def make_backend(kind: str, **kw):
         raise ValueError(f"unknown substrate backend {kind!r}; expected one of "
                          f"{sorted(BACKENDS)}")
     return BACKENDS[kind](**kw)
-
-
-# the axisymmetric FEM backend subclasses FEMBackend, so it registers after it (issue 16)
-from coupling.backend_fem_axisymmetric import AxisymmetricFEMBackend  # noqa: E402
-
-BACKENDS["fem-axisymmetric"] = AxisymmetricFEMBackend
