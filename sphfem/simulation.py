@@ -5,6 +5,12 @@ stable-time-step limits, take the smallest (and the scene's fixed ``time.dt`` if
 step every module in scene order, check the state for NaN/Inf, write outputs when due.
 A run records wall seconds per module and for the neighbour search, dt statistics with the
 controlling limit, and each module's diagnostics in ``summary.json``.
+
+The modules never see this object: every hook gets the run's
+:class:`~sphfem.context.StepContext`, whose list service (``ctx.neighbors()``) is
+:meth:`Simulation.ensure_neighbors`; particles a module's ``init`` returns (ghosts) are
+appended here, with one list rebuild (docs/architecture.md).  Only the driver layer
+(``sphfem.api``, ``sphfem.cli``, validation cases) imports this module.
 """
 
 from __future__ import annotations
