@@ -1,0 +1,428 @@
+"""Axisymmetric weakly compressible delta-SPH in the (r, z) half-plane.
+
+Particles are rings (:mod:`sphfem.axisymmetric`): constant ring mass M_i, meridian area
+A_i = M_i / (2 pi r_i rho_i), planar mass mt_i = rho_i A_i = M_i / (2 pi r_i).  Planar 2D
+kernels; F_ij = -W'(d) / d >= 0 so that grad_i W_ij = F_ij (x_j - x_i); u_ij = v_j - v_i.
+The axisymmetric equations without swirl (r, z components; Batchelor 1967 app. 2) are
+
+    Drho/Dt = -rho (d_r v_r + d_z v_z) - rho v_r / r                                  (1)
+    Dv/Dt   = -grad p / rho + (mu / rho) [lap_2 v + (1/r) d_r v - (v_r / r^2) e_r] + g   (2)
+
+((2) is the Laplacian form of div(2 mu D) / rho for a divergence-free velocity; written as
+a stress divergence its radial hoop part is (tau_rr - tau_tt) / r = 2 mu (d_r v_r - v_r / r)
+/ r, which for div v = 0 combines with d_r tau_rr + d_z tau_rz into the bracket).  The
+planar operators are the SPH sums of :mod:`sphfem.fluid.passes` with planar masses and areas;
+the hoop terms are added per particle (the formulation of Petschek & Libersky 1993 with
+the reflective axis particles of Garcia-Senz & Relano-Pastor 2012, MNRAS 424, 1585, sec. 2):
+
+    Drho_i/Dt = rho_i sum_j A_j (v_i - v_j) . grad_i W_ij - rho_i v_r,i / r_i
+                + 2 delta h c0 sum_j A_j [(rho_j - rho_i) - (<grad rho>_i + <grad rho>_j)
+                  . (x_j - x_i) / 2] F_ij                (fluid pairs; Antuono et al. 2010)
+    Dv_i/Dt   = -sum_j mt_j (p_i / rho_i^2 + p_j / rho_j^2) grad_i W_ij            (pressure)
+                + sum_j 4 mt_j (mu_i + mu_j) F_ij d_ij^2 u_ij
+                  / ((d_ij^2 + eps h^2) (rho_i + rho_j)^2)                  (Morris, lap_2 v)
+                + (mu_i / rho_i) [<d_r (v_r / r)>_i e_r + <d_r v_z>_i / r_i e_z]     (hoop)
+                + artificial viscosity (alpha h c0, as in passes) + g
+
+using (1/r) d_r v_r - v_r / r^2 = d_r (v_r / r): the SPH derivative of the even, smooth
+field v_r / r needs no division by r, while <d_r v_r> / r would carry the kernel's
+smoothing error of an odd field (3 c R^2 / r for v_r = r^3), which grows as 1/r towards
+the axis (first order at the first particle row; measured).  d_r v_z is odd, so its
+smoothing error vanishes on the axis and <d_r v_z> / r stays bounded.
+<.>: renormalised (B_i = (sum_j A_j F_ij r_ij r_ij)^-1) gradients; where B_i is singular or
+worse conditioned than ``cond_max`` the plain sum is used.  They sum over fluid
+neighbours and the walls' ghost velocities.  The delta term is the planar one (a numerical
+diffusion; its hoop part (1/r) d_r rho is left out).
+
+Axis: mirror particles (-r, z) of all particles with r < R carry rho, p, mu, A, mt and
+(-v_r, v_z) (the ghost velocity of a mirrored wall likewise), so the planar sums near the
+axis see an even / odd continuation of the fields.  A particle that crosses the axis in a
+step is reflected (r -> -r, v_r -> -v_r).  The hoop terms use r_i itself; no particle sits
+on the axis because mirrored pairs repel (their pressure term is symmetric about r = 0).
+
+Walls: Adami, Hu & Adams (2012) as in :mod:`sphfem.fluid.walls_adami2012`, with the planar
+kernel sums of the meridian plane (wall particles have a fixed meridian area ``vol``).
+Time stepping: the predictor-corrector position Verlet of :mod:`sphfem.fluid.wcsph`.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+
+import numpy as np
+from numba import njit, prange
+
+from sphfem import kernels
+from sphfem.fluid.eos import tait_B, tait_density, tait_pressure
+from sphfem.fluid.wcsph import FluidParams
+from sphfem.neighbors import build_neighbor_list, min_image
+from sphfem.particles import FLUID, WALL
+from sphfem.smallmat import invert_sym3
+
+#: kind codes of the mirror particles inside the augmented set (not ParticleSet kinds)
+MIRROR_FLUID, MIRROR_WALL = 4, 5
+
+
+def _keep_masks():
+    keep = [0] * (MIRROR_WALL + 1)
+    keep[FLUID] = (1 << FLUID) | (1 << WALL) | (1 << MIRROR_FLUID) | (1 << MIRROR_WALL)
+    keep[WALL] = (1 << FLUID) | (1 << MIRROR_FLUID)
+    return tuple(keep)
+
+
+KEEP = _keep_masks()
+
+
+@njit(cache=True, inline="always")
+def _isfluid(k):
+    return k == FLUID or k == MIRROR_FLUID
+
+
+@njit(cache=True, parallel=True)
+def wall_state(x, v, rho, p, kind, offsets, indices, R, kcode, Lz, gravity, rho0, B, gamma,
+               vg):
+    """Adami wall pressure, density and ghost velocity of the real WALL rows (planar kernel
+    in the meridian plane; walls at rest, no prescribed acceleration)."""
+    R2 = R * R
+    for i in prange(x.shape[0]):
+        if kind[i] != WALL:
+            continue
+        sw = 0.0
+        sp = 0.0
+        sh = 0.0
+        sv0 = 0.0
+        sv1 = 0.0
+        for jj in range(offsets[i], offsets[i + 1]):
+            j = indices[jj]
+            if not _isfluid(kind[j]):
+                continue
+            r0 = x[i, 0] - x[j, 0]
+            r1 = min_image(x[i, 1] - x[j, 1], Lz)
+            d2 = r0 * r0 + r1 * r1
+            if d2 >= R2:
+                continue
+            w = kernels.kernel_f(math.sqrt(d2) / R, kcode)
+            sw += w
+            sp += p[j] * w
+            sh += rho[j] * w * (gravity[0] * r0 + gravity[1] * r1)
+            sv0 += v[j, 0] * w
+            sv1 += v[j, 1] * w
+        if sw > 0.0:
+            pw = (sp + sh) / sw
+            p[i] = pw
+            rho[i] = max(tait_density(pw, rho0, B, gamma), 0.5 * rho0)
+            vg[i, 0] = 2.0 * v[i, 0] - sv0 / sw
+            vg[i, 1] = 2.0 * v[i, 1] - sv1 / sw
+        else:
+            p[i] = 0.0
+            rho[i] = rho0
+            vg[i, 0] = v[i, 0]
+            vg[i, 1] = v[i, 1]
+
+
+@njit(cache=True, parallel=True)
+def gradients(x, rho, vg, A, kind, offsets, indices, R, sigma, kcode, Lz, cond_max, grad_rho,
+              dvdr):
+    """Renormalised <grad rho>, <d_r (v_r / r)> and <d_r v_z> (``dvdr[:, 0]``, ``[:, 1]``)
+    of the real FLUID rows.
+
+    ``vg``: the velocity seen by the viscous terms (fluid: v, wall: Adami ghost velocity,
+    mirrors: the source's with v_r negated).  Rows that are not fluid are zeroed.
+    """
+    R2 = R * R
+    fac = sigma / R
+    for i in prange(x.shape[0]):
+        grad_rho[i, 0] = 0.0
+        grad_rho[i, 1] = 0.0
+        dvdr[i, 0] = 0.0
+        dvdr[i, 1] = 0.0
+        if kind[i] != FLUID:
+            continue
+        m00 = 0.0
+        m01 = 0.0
+        m11 = 0.0
+        g0 = 0.0
+        g1 = 0.0
+        a0 = 0.0  # sum A F (q_j - q_i) r_ij, q = v_r / r
+        a1 = 0.0
+        qi = vg[i, 0] / x[i, 0]
+        b0 = 0.0  # sum A F (v_z,j - v_z,i) r_ij
+        b1 = 0.0
+        for jj in range(offsets[i], offsets[i + 1]):
+            j = indices[jj]
+            r0 = x[j, 0] - x[i, 0]
+            r1 = min_image(x[j, 1] - x[i, 1], Lz)
+            d2 = r0 * r0 + r1 * r1
+            if d2 >= R2 or d2 == 0.0:
+                continue
+            d = math.sqrt(d2)
+            s = A[j] * (-fac * kernels.kernel_dfdq(d / R, kcode) / d)
+            m00 += s * r0 * r0
+            m01 += s * r0 * r1
+            m11 += s * r1 * r1
+            t = s * (rho[j] - rho[i])
+            g0 += t * r0
+            g1 += t * r1
+            qj = vg[j, 0] / x[j, 0] if x[j, 0] != 0.0 else qi
+            u = s * (qj - qi)
+            a0 += u * r0
+            a1 += u * r1
+            u = s * (vg[j, 1] - vg[i, 1])
+            b0 += u * r0
+            b1 += u * r1
+        good, c00, c01, c02, c10, c11, c12, c20, c21, c22 = invert_sym3(
+            m00, m01, 0.0, m11, 0.0, 1.0, 2, cond_max)
+        if good:
+            grad_rho[i, 0] = c00 * g0 + c01 * g1
+            grad_rho[i, 1] = c10 * g0 + c11 * g1
+            dvdr[i, 0] = c00 * a0 + c01 * a1
+            dvdr[i, 1] = c00 * b0 + c01 * b1
+        else:
+            grad_rho[i, 0] = g0
+            grad_rho[i, 1] = g1
+            dvdr[i, 0] = a0
+            dvdr[i, 1] = b0
+
+
+@njit(cache=True, parallel=True)
+def forces(x, v, vg, rho, p, A, mt, mu, kind, grad_rho, dvdr, offsets, indices, R, sigma,
+           kcode, Lz, gravity, eps2, delta_coef, art_coef, acc, drho):
+    """Accelerations and density rates of the real FLUID rows (module docstring); other
+    rows are zeroed.  Arrays run over the augmented set (real + mirrors, fields filled)."""
+    R2 = R * R
+    fac = sigma / R
+    for i in prange(x.shape[0]):
+        acc[i, 0] = 0.0
+        acc[i, 1] = 0.0
+        drho[i] = 0.0
+        if kind[i] != FLUID:
+            continue
+        ri = rho[i]
+        pri = p[i] / (ri * ri)
+        mui = mu[i]
+        rr = x[i, 0]
+        a0 = 0.0
+        a1 = 0.0
+        cont = 0.0
+        diff = 0.0
+        for jj in range(offsets[i], offsets[i + 1]):
+            j = indices[jj]
+            r0 = x[j, 0] - x[i, 0]
+            r1 = min_image(x[j, 1] - x[i, 1], Lz)
+            d2 = r0 * r0 + r1 * r1
+            if d2 >= R2 or d2 == 0.0:
+                continue
+            d = math.sqrt(d2)
+            F = -fac * kernels.kernel_dfdq(d / R, kcode) / d
+            rj = rho[j]
+            fl = _isfluid(kind[j])
+            mj = mt[j]
+            cp = -mj * (pri + p[j] / (rj * rj)) * F
+            muj = mu[j] if fl else mui
+            rs = ri + rj
+            inv = 1.0 / ((d2 + eps2) * rs * rs)
+            cv = 4.0 * (mui + muj) * mj * F * d2 * inv
+            u0 = vg[j, 0] - v[i, 0]
+            u1 = vg[j, 1] - v[i, 1]
+            cp += 2.0 * art_coef * mj * F * (u0 * r0 + u1 * r1) * rs * inv
+            a0 += cp * r0 + cv * u0
+            a1 += cp * r1 + cv * u1
+            VF = A[j] * F
+            cont -= VF * ((v[j, 0] - v[i, 0]) * r0 + (v[j, 1] - v[i, 1]) * r1)
+            if fl:
+                gs = (grad_rho[i, 0] + grad_rho[j, 0]) * r0 + (grad_rho[i, 1]
+                                                               + grad_rho[j, 1]) * r1
+                diff += ((rj - ri) - 0.5 * gs) * VF
+        nu = mui / ri
+        acc[i, 0] = a0 + nu * dvdr[i, 0] + gravity[0]
+        acc[i, 1] = a1 + nu * dvdr[i, 1] / rr + gravity[1]
+        drho[i] = ri * cont - ri * v[i, 0] / rr + delta_coef * 2.0 * diff
+
+
+@njit(cache=True, parallel=True)
+def _fill_mirrors(n, src, x, v, vg, rho, p, A, mt, mu, grad_rho, dvdr):
+    """Copy the sources' fields onto the mirrors n + q (v_r, grad_r rho and the r-derivatives
+    in ``dvdr`` negated)."""
+    for q in prange(src.shape[0]):
+        s = src[q]
+        g = n + q
+        x[g, 0] = -x[s, 0]
+        x[g, 1] = x[s, 1]
+        v[g, 0] = -v[s, 0]
+        v[g, 1] = v[s, 1]
+        vg[g, 0] = -vg[s, 0]
+        vg[g, 1] = vg[s, 1]
+        rho[g] = rho[s]
+        p[g] = p[s]
+        A[g] = A[s]
+        mt[g] = mt[s]
+        mu[g] = mu[s]
+        grad_rho[g, 0] = -grad_rho[s, 0]
+        grad_rho[g, 1] = grad_rho[s, 1]
+        dvdr[g, 0] = -dvdr[s, 0]
+        dvdr[g, 1] = -dvdr[s, 1]
+
+
+class AxisymmetricFluid:
+    """Stand-alone axisymmetric delta-SPH fluid with Adami walls (module docstring).
+
+    ``x`` (n, 2) positions (r >= 0, z), ``v`` (n, 2), ``rho`` (n,), ``kind`` FLUID or WALL
+    (walls at rest), ``M`` ring masses of the fluid particles [kg] (walls: ignored),
+    ``vol`` meridian areas of the wall particles [m^2] (fluid: ignored), support radius
+    ``R``, ``params`` (:class:`~sphfem.fluid.wcsph.FluidParams`: rho0, c0, gamma, mu, delta,
+    alpha, gravity (g_r, g_z), cfl, visc_cfl, force_cfl, eps_visc, cond_max are used);
+    ``periodic_z = (z0, Lz)``: z periodic on [z0, z0 + Lz) (None: open).
+    """
+
+    def __init__(self, x, v, rho, kind, M, vol, R, params: FluidParams,
+                 kernel: str = "wendland_c2", periodic_z=None):
+        self.x = np.array(x, dtype=np.float64)
+        n = self.n = self.x.shape[0]
+        self.v = np.array(v, dtype=np.float64).reshape(n, 2)
+        self.rho = np.array(rho, dtype=np.float64).reshape(n)
+        self.kind = np.asarray(kind, dtype=np.int8).reshape(n)
+        if np.any((self.kind != FLUID) & (self.kind != WALL)):
+            raise ValueError("axisymmetric fluid particles must be FLUID or WALL")
+        if np.any(self.x[:, 0] < 0):
+            raise ValueError("axisymmetric positions need r >= 0")
+        self.M = np.broadcast_to(np.asarray(M, float), (n,)).copy()
+        self.vol = np.broadcast_to(np.asarray(vol, float), (n,)).copy()
+        self.params = pa = params
+        self.mu = np.where(self.kind == FLUID, pa.mu, 0.0)
+        self.R = float(R)
+        self.h = 0.5 * self.R
+        self.kcode = kernels.kernel_code(kernel)
+        self.sigma = kernels.kernel_sigma(self.kcode, 2, self.R)
+        self.B = tait_B(pa.rho0, pa.c0, pa.gamma)
+        self.gravity = np.zeros(2)
+        gp = np.asarray(pa.gravity, float).reshape(-1)
+        self.gravity[: min(2, gp.size)] = gp[:2]
+        self.acc = np.zeros((n, 2))
+        self.drho = np.zeros(n)
+        self.p = np.zeros(n)
+        self.fluid = self.kind == FLUID
+        self.z0, self.Lz = (0.0, 0.0) if periodic_z is None else map(float, periodic_z)
+        if self.Lz and not self.R < 0.5 * self.Lz:
+            raise ValueError("the z period must exceed twice the support radius")
+        self.t = 0.0
+        self.step_count = 0
+        self.wall_s = {"neighbors": 0.0, "forces": 0.0}
+        self.evaluate()
+
+    # -- one force evaluation ------------------------------------------------------------
+    def evaluate(self) -> None:
+        """Pressures, wall states, mirrors, gradients, accelerations and density rates."""
+        t0 = time.perf_counter()
+        pa, n, R = self.params, self.n, self.R
+        src = np.flatnonzero(self.x[:, 0] < R)
+        m = n + src.shape[0]
+        kind = np.concatenate([self.kind, np.where(self.kind[src] == FLUID, MIRROR_FLUID,
+                                                   MIRROR_WALL).astype(np.int8)])
+        x = np.empty((m, 2))
+        x[:n] = self.x
+        x[n:, 0] = -self.x[src, 0]
+        x[n:, 1] = self.x[src, 1]
+        lo = x.min(axis=0) - R
+        hi = x.max(axis=0) + R
+        period = np.zeros(2)
+        if self.Lz:
+            lo[1], hi[1], period[1] = self.z0, self.z0 + self.Lz, self.Lz
+        nl = build_neighbor_list(x, R, lo, hi, period, kind=kind, keep=KEEP)
+        t1 = time.perf_counter()
+        self.wall_s["neighbors"] += t1 - t0
+        v = np.zeros((m, 2))
+        v[:n] = self.v
+        vg = v.copy()
+        rho = np.zeros(m)
+        rho[:n] = self.rho
+        p = np.zeros(m)
+        fl = self.fluid
+        p[:n][fl] = tait_pressure(self.rho[fl], pa.rho0, self.B, pa.gamma)
+        A = np.zeros(m)
+        mt = np.zeros(m)
+        mu = np.zeros(m)
+        mu[:n] = self.mu
+        gr = np.zeros((m, 2))
+        dvdr = np.zeros((m, 2))
+        # mirrors of the fluid first (walls read them), then the walls' state
+        _fill_mirrors(n, src, x, v, vg, rho, p, A, mt, mu, gr, dvdr)
+        wall_state(x, v, rho, p, kind, nl.offsets, nl.indices, R, self.kcode, self.Lz,
+                   self.gravity, pa.rho0, self.B, pa.gamma, vg)
+        A[:n] = np.where(fl, self.M / (2.0 * math.pi * np.maximum(self.x[:, 0], 1e-300)
+                                       * self.rho), self.vol)
+        A[:n][~fl] = self.vol[~fl]
+        mt[:n] = rho[:n] * A[:n]
+        _fill_mirrors(n, src, x, v, vg, rho, p, A, mt, mu, gr, dvdr)
+        gradients(x, rho, vg, A, kind, nl.offsets, nl.indices, R, self.sigma, self.kcode,
+                  self.Lz, pa.cond_max, gr, dvdr)
+        _fill_mirrors(n, src, x, v, vg, rho, p, A, mt, mu, gr, dvdr)
+        acc = np.zeros((m, 2))
+        drho = np.zeros(m)
+        forces(x, v, vg, rho, p, A, mt, mu, kind, gr, dvdr, nl.offsets, nl.indices, R,
+               self.sigma, self.kcode, self.Lz, self.gravity, pa.eps_visc * self.h**2,
+               pa.delta * self.h * pa.c0, pa.alpha * self.h * pa.c0, acc, drho)
+        self.acc[:] = acc[:n]
+        self.drho[:] = drho[:n]
+        self.p[:] = p[:n]
+        self.area = A[:n].copy()
+        self.wall_s["forces"] += time.perf_counter() - t1
+
+    # -- time stepping -------------------------------------------------------------------
+    def dt_limits(self) -> dict[str, float]:
+        """Acoustic, viscous and force limits [s] (as :meth:`FluidSolver.dt_limits`)."""
+        pa, fl = self.params, self.fluid
+        vmax = float(np.sqrt((self.v[fl] ** 2).sum(axis=1)).max())
+        amax = float(np.sqrt((self.acc[fl] ** 2).sum(axis=1)).max())
+        lim = {"acoustic": pa.cfl * self.h / (pa.c0 + vmax)}
+        if pa.mu > 0:
+            lim["viscous"] = pa.visc_cfl * self.h**2 * float(self.rho[fl].min()) / pa.mu
+        if amax > 0:
+            lim["force"] = pa.force_cfl * math.sqrt(self.h / amax)
+        return lim
+
+    def stable_dt(self) -> float:
+        return min(self.dt_limits().values())
+
+    def step(self, dt: float) -> None:
+        """Predictor-corrector position Verlet (:mod:`sphfem.fluid.wcsph`); particles that
+        cross the axis are reflected."""
+        fl = self.fluid
+        v_n = self.v[fl].copy()
+        rho_n = self.rho[fl].copy()
+        self.x[fl] += 0.5 * dt * self.v[fl]
+        self.v[fl] += 0.5 * dt * self.acc[fl]
+        self.rho[fl] += 0.5 * dt * self.drho[fl]
+        self._reflect()
+        self.evaluate()
+        self.v[fl] = v_n + dt * self.acc[fl]
+        self.rho[fl] = rho_n + dt * self.drho[fl]
+        self.x[fl] += 0.5 * dt * self.v[fl]
+        self._reflect()
+        self.t += dt
+        self.step_count += 1
+        if not np.isfinite(self.x[fl]).all() or not np.isfinite(self.rho[fl]).all():
+            raise FloatingPointError(f"axisymmetric fluid: non-finite state at step "
+                                     f"{self.step_count}, t = {self.t:.4g} s")
+
+    def _reflect(self) -> None:
+        neg = self.fluid & (self.x[:, 0] < 0.0)
+        self.x[neg, 0] *= -1.0
+        self.v[neg, 0] *= -1.0
+        if self.Lz:
+            self.x[:, 1] = self.z0 + np.mod(self.x[:, 1] - self.z0, self.Lz)
+
+    def run(self, t_end: float, callback=None, every: float | None = None) -> int:
+        """Step to ``t_end`` with the stable step, ``callback(self)`` every ``every`` s."""
+        next_cb = self.t + every if every else math.inf
+        while self.t < t_end * (1 - 1e-12):
+            dt = min(self.stable_dt(), t_end - self.t, max(next_cb - self.t, 1e-300))
+            self.step(dt)
+            if callback is not None and self.t >= next_cb * (1 - 1e-12):
+                callback(self)
+                next_cb += every
+        return self.step_count
+
+    def total_mass(self) -> float:
+        """sum of the fluid's ring masses [kg] (constant by construction)."""
+        return float(self.M[self.fluid].sum())
