@@ -17,6 +17,7 @@ _LAZY = {
     "substrate_rect": "sphfem.fem", "substrate_block": "sphfem.fem",
     "TLSPHSubstrate": "sphfem.solid.backend",
     "SceneError": "sphfem.errors", "OutputExistsError": "sphfem.output",
+    "OutputFolderError": "sphfem.errors",
 }
 
 

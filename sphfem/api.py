@@ -15,8 +15,9 @@ The substrate solvers are the classes themselves (:class:`sphfem.fem.FEMSubstrat
 ``sphfem.TLSPHSubstrate`` together with the mesh recipes ``substrate_rect`` /
 ``substrate_block`` and ``load_mesh``.
 
-This module only wraps what the command line does (``sphfem run`` / ``sphfem validate``):
-the same scene validation, output-folder guard, driver and ``summary.json``.
+The command line is built on this module: ``sphfem run`` calls :func:`run` (the same scene
+validation, output-folder guard, set-up, driver and ``summary.json``) and only adds its own
+wording and exit codes.
 """
 
 from __future__ import annotations
@@ -27,10 +28,12 @@ import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from pathlib import Path
 
+from sphfem.errors import OutputExistsError, OutputFolderError, SceneError
+
 logger = logging.getLogger(__name__)
 
-__all__ = ["Result", "RunStopped", "load_result", "load_scene", "run", "validate",
-           "validation_cases"]
+__all__ = ["OutputFolderError", "Result", "RunStopped", "SceneError", "load_result",
+           "load_scene", "run", "validate", "validation_cases"]
 
 
 # --------------------------------------------------------------------------------------
@@ -70,18 +73,22 @@ def run(scene, out, overwrite: bool = False, resume: bool = False, progress: boo
         raise_on_stop: bool = True, keep_checkpoint: bool = False) -> Result:
     """Run ``scene`` (path, dict or Scene) to its end time, writing into folder ``out``.
 
-    What ``sphfem run SCENE --out OUT`` does, returned as a :class:`Result` that keeps the
-    live simulation (final particle state) next to ``summary.json`` and the output files.
-    An existing non-empty ``out`` raises :class:`sphfem.output.OutputExistsError` unless
-    ``overwrite`` (delete it first) or ``resume`` (continue from its checkpoint, which a
-    completed run deletes unless ``keep_checkpoint``).  ``progress``: the progress bar and
-    the set-up stage lines on stderr (:mod:`sphfem.progress`), as the command line shows
-    them.  A run stopped by a stability guard raises :class:`RunStopped`
-    (``raise_on_stop=False``: returns the result with ``status == "stopped"``).
+    ``sphfem run SCENE --out OUT`` is this function, returned as a :class:`Result` that
+    keeps the live simulation (final particle state) next to ``summary.json`` and the output
+    files.  An existing non-empty ``out`` raises :class:`sphfem.output.OutputExistsError`
+    unless ``overwrite`` (delete it first) or ``resume`` (continue from its checkpoint, which
+    a completed run deletes unless ``keep_checkpoint``); a folder that cannot be created
+    raises :class:`sphfem.errors.OutputFolderError`; both are checked before the set-up.  A
+    set-up that fails on the scene's inputs (a mesh file missing or corrupt, an unknown mesh
+    group, overlapping blocks) raises :class:`sphfem.scene.SceneError` (``source: set-up
+    failed: ...``, the original error chained) before anything is written.  ``progress``:
+    the progress bar and the set-up stage lines on stderr (:mod:`sphfem.progress`).  A run
+    stopped by a stability guard raises :class:`RunStopped` (``raise_on_stop=False``:
+    returns the result with ``status == "stopped"``).
     """
     from sphfem import progress as report
-    from sphfem.output import OutputExistsError, prepare_output_dir
-    from sphfem.simulation import Simulation, SimulationStopped
+    from sphfem.output import prepare_output_dir
+    from sphfem.simulation import SimulationStopped
 
     sc = load_scene(scene)
     source = str(scene) if isinstance(scene, (str, os.PathLike)) else getattr(sc, "source", None)
@@ -90,11 +97,16 @@ def run(scene, out, overwrite: bool = False, resume: bool = False, progress: boo
         prepare_output_dir(out, check_only=True, **opts)
     except OutputExistsError as e:
         raise OutputExistsError(str(e).replace("--overwrite", "overwrite=True")) from None
+    _check_creatable(out)
     was = report.enabled()
     report.enable(progress or was)
     try:
-        sim = Simulation(sc, source=source)
-        folder = prepare_output_dir(out, **opts)
+        sim = _set_up(sc, source)
+        try:
+            folder = prepare_output_dir(out, **opts)
+        except OSError as e:
+            raise OutputFolderError(f"{out}: cannot create the output folder: "
+                                    f"{e.strerror or e}") from e
         try:
             summary = sim.run(folder, progress=progress, resume=resume,
                               keep_checkpoint=keep_checkpoint)
@@ -106,6 +118,34 @@ def run(scene, out, overwrite: bool = False, resume: bool = False, progress: boo
     finally:
         report.enable(was)
     return Result(folder, summary, sc, sim)
+
+
+def _check_creatable(out) -> None:
+    """Raise :class:`OutputFolderError` unless ``out`` exists or its nearest existing
+    ancestor is a writable folder (checked before the set-up, which can take minutes)."""
+    if os.path.exists(out):
+        return
+    up = os.path.dirname(os.path.abspath(out))
+    while not os.path.exists(up):
+        up = os.path.dirname(up)
+    if not os.path.isdir(up) or not os.access(up, os.W_OK | os.X_OK):
+        why = "is not a folder" if not os.path.isdir(up) else "is not writable"
+        raise OutputFolderError(f"{out}: cannot create the output folder: {up} {why}")
+
+
+def _set_up(scene, source):
+    """Build the :class:`sphfem.simulation.Simulation` of ``scene``; a failure on the
+    scene's inputs (meshes, probes, particles) becomes a :class:`SceneError` naming
+    ``source``."""
+    from sphfem.simulation import Simulation
+
+    try:
+        return Simulation(scene, source=source)
+    except SceneError:  # e.g. overlapping blocks, found while building particles
+        raise
+    except (ValueError, KeyError, OSError) as e:
+        msg = " ".join(str(e).split()) or type(e).__name__
+        raise SceneError(source or scene.source, "", f"set-up failed: {msg}") from e
 
 
 def load_result(out) -> Result:

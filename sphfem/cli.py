@@ -10,7 +10,6 @@ from __future__ import annotations
 import argparse
 import json
 import logging
-import os
 import sys
 
 EXIT_OK, EXIT_FAIL, EXIT_USAGE = 0, 1, 2
@@ -191,51 +190,29 @@ def _cmd_bench(args) -> int:
 
 
 def _cmd_run(args) -> int:
-    from sphfem import progress
-    from sphfem.output import OutputExistsError, prepare_output_dir
-    from sphfem.scene import SceneError, load_scene
-    from sphfem.simulation import Simulation, SimulationStopped, format_summary
+    """``sphfem run``: :func:`sphfem.api.run`, with the command line's wording and exit codes."""
+    from sphfem import api
+    from sphfem.errors import OutputExistsError, OutputFolderError, SceneError
+    from sphfem.output import prepare_output_dir
+    from sphfem.simulation import format_summary
 
-    progress.enable(not args.no_progress)
     try:
-        scene = load_scene(args.scene)
-    except SceneError as e:
+        scene = api.load_scene(args.scene)
+        # refused in the command line's words (--overwrite); api.run checks again (a no-op)
+        prepare_output_dir(args.out, check_only=True, overwrite=args.overwrite,
+                           resume=args.resume)
+        res = api.run(scene, args.out, overwrite=args.overwrite, resume=args.resume,
+                      progress=not args.no_progress, keep_checkpoint=args.keep_checkpoint)
+    except (SceneError, OutputExistsError, OutputFolderError) as e:
         raise UsageError(str(e)) from None
-    opts = dict(overwrite=args.overwrite, resume=args.resume)
-    try:
-        prepare_output_dir(args.out, check_only=True, **opts)
-    except OutputExistsError as e:
-        raise UsageError(str(e)) from None
-    if not os.path.exists(args.out):  # it can be created: the nearest existing ancestor
-        up = os.path.dirname(os.path.abspath(args.out))  # is a writable folder
-        while not os.path.exists(up):
-            up = os.path.dirname(up)
-        if not os.path.isdir(up) or not os.access(up, os.W_OK | os.X_OK):
-            why = "is not a folder" if not os.path.isdir(up) else "is not writable"
-            raise UsageError(f"{args.out}: cannot create the output folder: {up} {why}")
-    try:  # set-up problems (meshes, probes, overlapping bodies) stop before any output
-        sim = Simulation(scene, source=args.scene)
-    except SceneError as e:  # e.g. overlapping blocks, found while building particles
-        raise UsageError(str(e)) from None
-    except (ValueError, KeyError, OSError) as e:
-        msg = " ".join(str(e).split()) or type(e).__name__
-        raise UsageError(f"{args.scene}: set-up failed: {msg}") from None
-    try:
-        out = prepare_output_dir(args.out, **opts)
-    except OSError as e:
-        raise UsageError(f"{args.out}: cannot create the output folder: "
-                         f"{e.strerror or e}") from None
-    try:
-        summary = sim.run(out, progress=not args.no_progress, resume=args.resume,
-                          keep_checkpoint=args.keep_checkpoint)
-    except SimulationStopped as e:
+    except api.RunStopped as e:
         print(f"sphfem: run stopped: {e}", file=sys.stderr)
         return EXIT_FAIL
     if args.json:
         keys = ("status", "steps", "t", "setup_s", "wall_s", "total_s", "peak_rss_mb")
-        print(json.dumps({k: summary[k] for k in keys if k in summary}))
+        print(json.dumps({k: res.summary[k] for k in keys if k in res.summary}))
     else:
-        print(format_summary(summary, out))
+        print(format_summary(res.summary, res.out))
     return EXIT_OK
 
 
