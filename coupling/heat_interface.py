@@ -240,7 +240,7 @@ class ContactHeatInterface:
         b = np.maximum(z[cols] + 0.5 * h[cols], a + 1e-12 * h[cols])
         phi = np.bincount(rows, weights=w * cell_mean_erf(a, b, s_n[rows]),
                           minlength=n_nodes)
-        mean_inv_sqrt = 2.0 * (np.sqrt(t_w + dt) - np.sqrt(t_w)) / dt
+        mean_inv_sqrt = 2.0 / (np.sqrt(t_w + dt) + np.sqrt(t_w))  # = 2 (sqrt(t+dt) - sqrt t)/dt
         with np.errstate(divide="ignore"):
             return np.where(phi > 0, self.k_f * mean_inv_sqrt
                             / (math.sqrt(math.pi * self.alpha_f) * phi), 0.0)
