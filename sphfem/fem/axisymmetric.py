@@ -60,8 +60,8 @@ logger = logging.getLogger(__name__)
 
 __all__ = ["AxisymmetricFEMSubstrate", "AxisymmetricResult", "axisymmetric_elasticity",
            "axisymmetric_thermal_load", "axisymmetric_traction_load",
-           "axisymmetric_body_force_load", "axisymmetric_stress", "substrate_rz",
-           "FORCE_CONVENTIONS"]
+           "axisymmetric_body_force_load", "axisymmetric_stress", "graded_tensor_rz",
+           "substrate_rz", "FORCE_CONVENTIONS"]
 
 TWO_PI = 2.0 * np.pi
 _COMPONENTS_RZ = {"r": 0, "z": 1}
@@ -169,6 +169,32 @@ def substrate_rz(path=None, radius=1e-3, depth=0.26e-3, h_fine=20e-6, h_coarse=1
     return substrate_rect(path, size=(radius, depth), h_fine=h_fine, h_coarse=h_coarse,
                           refine_center=center, refine_radius=refine_radius, order=order,
                           element=element, origin=(0.0, -depth), growth=growth)
+
+
+def graded_tensor_rz(radius: float, depth: float, h_fine: float, fine_extent: float,
+                     growth: float = 1.2, element: str = "quad"):
+    """Structured (r, z) mesh of [0, radius] x [-depth, 0] without gmsh: spacing exactly
+    ``h_fine`` for r, |z| <= ``fine_extent`` (so a load patch whose radius is a multiple of
+    h_fine ends on a node), then growing by ``growth`` per cell.  ``element`` "quad" or
+    "tri"; boundaries "left" (the axis), "right", "bottom", "top"."""
+    from skfem import MeshQuad, MeshTri
+
+    if not 0 < h_fine <= fine_extent or growth < 1.0:
+        raise ValueError("graded_tensor_rz: need 0 < h_fine <= fine_extent and growth >= 1")
+
+    def axis(total):
+        n = int(round(min(fine_extent, total) / h_fine))
+        x, step = list(h_fine * np.arange(n + 1)), h_fine
+        while x[-1] < total * (1 - 1e-12):
+            step *= growth
+            x.append(min(x[-1] + step, total))
+        if len(x) > n + 2 and x[-1] - x[-2] < 0.5 * (x[-2] - x[-3]):
+            del x[-2]  # merge a sliver last cell into its neighbour
+        x[-1] = total
+        return np.array(x)
+
+    mesh_type = {"quad": MeshQuad, "tri": MeshTri}[element]
+    return mesh_type.init_tensor(axis(radius), -axis(depth)[::-1]).with_defaults()
 
 
 def _rz_components(spec) -> list[int]:
