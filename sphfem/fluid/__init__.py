@@ -2,15 +2,22 @@
 
 * :mod:`sphfem.fluid.eos` -- Tait equation of state and its inverse;
 * :mod:`sphfem.fluid.passes` -- fused numba passes (density gradient, forces);
-* :mod:`sphfem.fluid.walls_adami2012` -- wall pressure / velocity extrapolation;
-* :mod:`sphfem.fluid.surface_tension` -- registry of the surface-tension methods, one module
-  each (:mod:`~sphfem.fluid.surface_tension_csf`,
+* method registries (:class:`sphfem.methods.MethodRegistry`), one module per method:
+  :mod:`~sphfem.fluid.pressure` (``wcsph``:
+  :mod:`~sphfem.fluid.pressure_deltasph_antuono2010`), :mod:`~sphfem.fluid.integrators`
+  (``symplectic``: :mod:`~sphfem.fluid.integrator_symplectic_gomezgesteira2012`),
+  :mod:`~sphfem.fluid.walls` (``adami2012``: :mod:`~sphfem.fluid.walls_adami2012`),
+  :mod:`~sphfem.fluid.viscosity` (``laminar``:
+  :mod:`~sphfem.fluid.viscosity_laminar_shao2003`, ``morris``:
+  :mod:`~sphfem.fluid.viscosity_morris1997`) and :mod:`~sphfem.fluid.surface_tension`
+  (:mod:`~sphfem.fluid.surface_tension_csf`,
   :mod:`~sphfem.fluid.surface_tension_iif_tartakovsky2005`,
   :mod:`~sphfem.fluid.surface_tension_akinci2013`);
 * :mod:`sphfem.fluid.surface` -- colour gradient, free-surface detection, shifting;
 * :mod:`sphfem.fluid.guards` -- stability guards;
 * :mod:`sphfem.fluid.wcsph` -- :class:`FluidParams`, :class:`FluidSolver`, the ``fluid``
   physics module;
+* :mod:`sphfem.fluid.standalone` -- the context and Verlet list of a stand-alone run;
 * :mod:`sphfem.fluid.scene_section` -- the ``[fluid]`` scene section;
 * :mod:`sphfem.fluid.setup` -- lattices, wall layers and hydrostatic initial states;
 * :mod:`sphfem.fluid.packing` -- initial particle packing (``[fluid.packing]``, declared in
@@ -18,9 +25,9 @@
 * :mod:`sphfem.fluid.bench` -- the 3D dam-break throughput benchmark.
 
 Importing this package registers the module and its section; the solver classes are
-imported on first attribute access.  The section's surface-tension keys come from the
-method modules, which declare them next to their numba kernels, so importing the package
-loads numba (nothing is compiled).
+imported on first attribute access.  The section's method keys come from the method
+modules, which declare them next to their numba kernels, so importing the package loads
+numba (nothing is compiled).
 """
 
 from dataclasses import replace as _replace

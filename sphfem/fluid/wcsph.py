@@ -25,10 +25,10 @@ predictor-corrector form of DualSPHysics, one force evaluation per step, second 
 Time-step limits (h = R/2), each reported by name: acoustic ``cfl h / (c0 + |v|max)``,
 viscous ``visc_cfl h^2 min(rho/mu)``, force ``force_cfl sqrt(h / |a|max)``.
 
-Neighbours: a Verlet list of radius R (1 + skin), rebuilt only when some fluid particle at
-the half-step position would have moved more than skin R / 2 since the last build; the
-particles are cell-sorted every ``sort_every`` rebuilds (all fields of the ParticleSet are
-permuted together).
+Neighbours: the context's list (:class:`~sphfem.context.StepContext`), asked for after every
+drift; stand-alone, the Verlet list of :mod:`sphfem.fluid.standalone` (radius R (1 + skin),
+rebuilt when some fluid particle moved more than skin R / 2 since the last build, cell sort
+every ``sort_every`` builds, all fields of the ParticleSet permuted together).
 """
 
 from __future__ import annotations
@@ -44,6 +44,7 @@ import numpy as np
 from numba import njit, prange
 
 from sphfem import kernels
+from sphfem.context import StepContext
 from sphfem.fluid import (
     integrators,
     passes,
@@ -57,12 +58,8 @@ from sphfem.fluid.eos import tait_B
 from sphfem.fluid.guards import check_fluid
 from sphfem.fluid.scene_section import FLUID as FLUID_SECTION
 from sphfem.fluid.scene_section import REGISTRIES
-from sphfem.neighbors import (
-    NeighborList,
-    build_neighbor_list,
-    cell_sort_permutation,
-    min_image,
-)
+from sphfem.fluid.standalone import standalone_context
+from sphfem.neighbors import NeighborList
 from sphfem.particles import FLUID, WALL, ParticleSet
 from sphfem.physics import PhysicsModule, register_physics
 
@@ -189,22 +186,6 @@ def add_fluid_fields(particles: ParticleSet, params: FluidParams | None = None) 
 
 
 @njit(cache=True, parallel=True)
-def _max_disp_sq(x, xref, v, half_dt, kind, period):
-    """max over fluid of |x + half_dt v - xref|^2 (minimum image on periodic axes)."""
-    n, dim = x.shape
-    out = np.zeros(n)
-    for i in prange(n):
-        if kind[i] != FLUID:
-            continue
-        s = 0.0
-        for k in range(dim):
-            d = min_image(x[i, k] + half_dt * v[i, k] - xref[i, k], period[k])
-            s += d * d
-        out[i] = s
-    return out.max() if n else 0.0
-
-
-@njit(cache=True, parallel=True)
 def _fluid_maxima(v, acc, rho, mu, kind):
     """max |v|, max |a| and min rho/mu over fluid particles (strict maths)."""
     n, dim = v.shape
@@ -275,19 +256,19 @@ class FluidSolver:
     Parameters: ``particles`` (fields ``v, acc, drho, p, mu, f_fluid`` are added), support
     radius ``R`` [m], domain box ``lo``/``hi`` and ``period`` (0 on open axes), ``params``.
 
-    Neighbours: stand-alone (``sim=None``) the solver keeps its own Verlet list (radius
-    R (1 + skin), cell sort every ``sort_every`` rebuilds), built directly as the filtered
-    view (pair filter of the search).  Driven by a
-    driver (``sim``: the run's :class:`~sphfem.context.StepContext`) it uses the shared list
-    ``sim.nbrs``: after its half drift it asks ``sim.neighbors()`` for a valid list and,
-    whenever ``sim.nbrs_version`` changed, derives its filtered view (:func:`passes.filter_rows`).
-    Both paths run the same passes on the same filtered view.
+    Context: the solver works on a :class:`~sphfem.context.StepContext` ``ctx`` (the
+    driver's, when a :class:`~sphfem.simulation.Simulation` drives it).  After every drift
+    it asks ``ctx.neighbors()`` for a list valid at the current positions and, whenever
+    ``ctx.nbrs_version`` changed, derives its filtered view (:func:`passes.filter_rows`;
+    nothing to filter when the context says ``fluid_view``).  Without ``ctx`` the solver
+    builds the stand-alone one of :func:`sphfem.fluid.standalone.standalone_context` (its
+    own Verlet list of radius R (1 + skin), cell sort every ``sort_every`` builds) and
+    :meth:`run` is the stand-alone loop: one path of neighbours, forces and steps for both.
     """
 
     def __init__(self, particles: ParticleSet, R: float, lo, hi, period=None,
-                 params: FluidParams | None = None, kernel: str = "wendland_c2", sim=None):
-        self.sim = sim
-        self._p = particles
+                 params: FluidParams | None = None, kernel: str = "wendland_c2",
+                 ctx: StepContext | None = None):
         self.params = params or FluidParams()
         self.dim = particles.dim
         self.R = float(R)
@@ -332,16 +313,18 @@ class FluidSolver:
         #: pass (False: over the full filtered Verlet list; same results, for tests)
         self.compact_rows = True
         self._st_state = None  # work arrays of the surface-tension method
-        self._xref = None
+        if ctx is None:  # stand-alone: the fluid's own context and list service
+            ctx = standalone_context(particles, self.R, self.sigma, self.kernel_code, kernel,
+                                     self.lo, self.hi, self.period, self.params, self.wall,
+                                     self.reorder)
+        self.ctx = ctx
         if self.params.threads:
             self.nthreads = self.params.threads
         else:
             self.nthreads = 1 if particles.n < SERIAL_BELOW else 0
         with _threads(self.nthreads):
-            if sim is None:
-                self.rebuild_neighbors()
-            else:
-                self._sync_neighbors()
+            ctx.neighbors()
+            self._sync_neighbors()
             self.evaluate()
 
     def _surface_constants(self) -> None:
@@ -356,8 +339,8 @@ class FluidSolver:
 
     @property
     def p(self) -> ParticleSet:
-        """The particle set (the driver's current one when driven)."""
-        return self.sim.particles if self.sim is not None else self._p
+        """The particle set (the context's current one)."""
+        return self.ctx.particles
 
     # -- neighbours -----------------------------------------------------------------------
     @property
@@ -387,51 +370,28 @@ class FluidSolver:
             self._scratch = _Scratch(self.p.n, self.dim)
 
     def rebuild_neighbors(self) -> None:
-        """Stand-alone: wrap periodic positions, cell-sort every ``sort_every`` builds,
-        rebuild the list."""
-        t0 = time.perf_counter()
-        x = self.p.x
-        for k in range(self.dim):
-            L = self.period[k]
-            if L > 0:
-                x[:, k] = self.lo[k] + np.mod(x[:, k] - self.lo[k], L)
-        if self.params.sort_every and self.n_rebuilds % self.params.sort_every == 0:
-            perm = cell_sort_permutation(x, self.list_radius, self.lo, self.hi, self.period)
-            self.p.reorder(perm)
-            self.reorder(perm)
-        # the fluid's view directly (pair filter in the search: no filter_rows pass)
-        self._set_filtered(build_neighbor_list(self.p.x, self.list_radius, self.lo, self.hi,
-                                               self.period, kind=self.p.kind,
-                                               keep=passes.VIEW_KEEP))
-        self._xref = self.p.x.copy()
-        self.wall["neighbors"] += time.perf_counter() - t0
+        """Build the list anew now (through the context) and take its view."""
+        self.ctx.neighbors(rebuild=True)
+        self._sync_neighbors()
 
     def _sync_neighbors(self) -> None:
-        """Driven: take the driver's list if it changed since the last view."""
-        sim = self.sim
-        if sim.nbrs_version != self._nbrs_version or self.nbrs is None:
+        """Take the context's list if it changed since the last view."""
+        ctx = self.ctx
+        if ctx.nbrs_version != self._nbrs_version or self.nbrs is None:
             t0 = time.perf_counter()
-            self._set_view(sim.nbrs)
-            self._nbrs_version = sim.nbrs_version
+            if getattr(ctx, "fluid_view", False):  # built as the fluid's view
+                self._set_filtered(ctx.nbrs)
+            else:
+                self._set_view(ctx.nbrs)
+            self._nbrs_version = ctx.nbrs_version
             self.wall["neighbors"] += time.perf_counter() - t0
         elif self._scratch is None or self._scratch.n != self.p.n:
             self._scratch = _Scratch(self.p.n, self.dim)
 
     def after_drift(self) -> None:
-        """Make the list valid for the current (half-drifted) positions."""
-        if self.sim is not None:
-            self.sim.neighbors()
-            self._sync_neighbors()
-            return
-        if self.params.skin <= 0:
-            self.rebuild_neighbors()
-            return
-        t0 = time.perf_counter()
-        lim = 0.5 * self.params.skin * self.R
-        d2 = _max_disp_sq(self.p.x, self._xref, self.p.v, 0.0, self.p.kind, self.period)
-        self.wall["neighbors"] += time.perf_counter() - t0
-        if d2 > lim * lim:
-            self.rebuild_neighbors()
+        """Make the list valid for the current (drifted) positions."""
+        self.ctx.neighbors()
+        self._sync_neighbors()
 
     def reorder(self, perm: np.ndarray) -> None:
         """The particle fields were permuted by ``perm``: permute the mid-step state."""
@@ -516,8 +476,7 @@ class FluidSolver:
             self._step(dt)
 
     def _step(self, dt: float) -> None:
-        if self.sim is not None:
-            self._sync_neighbors()
+        self._sync_neighbors()
         self.pressure_method.advance(self, dt)
         p, s = self.p, self._scratch
         t0 = time.perf_counter()
@@ -678,7 +637,7 @@ class FluidModule(PhysicsModule):
         if self.packing_report is None and ctx.step == 0 and ctx.t == 0.0:
             self._pack(ctx)
         self.solver = FluidSolver(ps, ctx.R, ctx.lo, ctx.hi, ctx.period, self.params,
-                                  kernel=self.scene.sph.kernel, sim=ctx)
+                                  kernel=self.scene.sph.kernel, ctx=ctx)
         self.solver.t = ctx.t  # a resumed run keeps its body-force ramp
         self.solver.step_count = ctx.step
 
