@@ -33,9 +33,11 @@ sys.path.insert(1, os.path.dirname(os.path.dirname(HERE)))
 import compare  # noqa: E402
 import run_pysph  # noqa: E402
 
+from sphfem.fluid import integrator_symplectic_gomezgesteira2012 as SY  # noqa: E402
 from sphfem.fluid import passes  # noqa: E402
 from sphfem.fluid import wcsph as W  # noqa: E402
 from sphfem.fluid.guards import check_fluid  # noqa: E402
+from sphfem.fluid.standalone import max_disp_sq  # noqa: E402
 from sphfem.fluid.walls_adami2012 import adami_wall_state  # noqa: E402
 from sphfem.neighbors import build_neighbor_list, cell_sort_permutation  # noqa: E402
 from sphfem.particles import FLUID, WALL  # noqa: E402
@@ -63,9 +65,10 @@ def kernels_of(s, nl=None):
     passes.compact_rows(p.x, p.kind, nl.offsets, nl.indices, s.R, s.period, nb, cnt)
     ks = {
         "stable_dt": lambda: W._fluid_maxima(p.v, p.acc, p.rho, p.mu, p.kind),
-        "predict": lambda: W._predict(p.x, p.v, p.rho, p.acc, p.drho, p.kind, dt, sc.v_n,
+        "predict": lambda: SY.predict(p.x, p.v, p.rho, p.acc, p.drho, p.kind, dt, sc.v_n,
                                       sc.rho_n),
-        "skin_check": lambda: W._max_disp_sq(p.x, s._xref, p.v, 0.0, p.kind, s.period),
+        "skin_check": lambda: max_disp_sq(p.x, s.ctx.provide.xref, p.v, 0.0, p.kind,
+                                          s.period),
         "prepare_fluid": lambda: passes.prepare_fluid(p.rho, p.m, p.v, p.kind, pa.rho0, s.B,
                                                       pa.gamma, p.p, sc.vg),
         "adami_wall_state": lambda: adami_wall_state(
@@ -82,7 +85,7 @@ def kernels_of(s, nl=None):
             sc.P, p.kind, nl.offsets, cnt, nb, s.R, s.sigma, s.kernel_code, s.period, g,
             pa.eps_visc * s.h * s.h, delta_coef, pa.alpha * s.h * pa.c0, p.acc, p.drho,
             p.f_fluid),
-        "correct": lambda: W._correct(p.x, p.v, p.rho, p.acc, p.drho, p.kind, dt, sc.v_n,
+        "correct": lambda: SY.correct(p.x, p.v, p.rho, p.acc, p.drho, p.kind, dt, sc.v_n,
                                       sc.rho_n),
         "guards": lambda: check_fluid(p.x, p.v, p.rho, p.kind, s.lo, s.hi, s.period, pa.c0,
                                       pa.rho0, pa.max_speed_factor, pa.rho_ratio_band, 0,
