@@ -7,7 +7,11 @@
 * Long solid cylinder, radial temperature T1 (r/b)^2, plane strain (T & G sec. 150).
 * Manufactured solution with all four strain components and a temperature field nonzero.
 * Loads: ring-force convention, reactions, factorised once; bad input.
+* Uniform circular pressure on a half-space: Love's stresses on the axis.
 * (slow) the 3D FEMSubstrate on a gmsh cylinder under the same smooth pressure patch.
+
+The exact solutions live in :mod:`sphfem.validation.fem_axisymmetric` (``sphfem validate
+fem-axisymmetric``).
 """
 
 from __future__ import annotations
@@ -20,8 +24,25 @@ from sphfem.fem import FEMSubstrate
 from sphfem.fem.axisymmetric import AxisymmetricFEMSubstrate, graded_tensor_rz, substrate_rz
 from sphfem.fem.meshing import substrate_rect
 from sphfem.fem.substrate import load_mesh
-
-E, NU, ALPHA = 200e9, 0.3, 1.2e-5
+from sphfem.validation.fem_axisymmetric import (
+    A_IN,
+    ALPHA,
+    B_OUT,
+    LEN,
+    MB,
+    ML,
+    NU,
+    P_IN,
+    RB,
+    T1,
+    E,
+    lame_exact,
+    love_axis,
+    mesh_size,
+    mms_fields,
+    radial_exact,
+    rl2,
+)
 
 
 @pytest.fixture(scope="module", autouse=True)
@@ -32,12 +53,6 @@ def _cache(tmp_path_factory):
     mp.undo()
 
 
-def rl2(s, err_qp, ref_qp):
-    """Relative r-weighted L2 norm of quadrature-point fields (ncomp, nelems, nqp)."""
-    return np.sqrt((np.sum(np.square(err_qp), axis=0) * s.rdx).sum()
-                   / (np.sum(np.square(ref_qp), axis=0) * s.rdx).sum())
-
-
 def orders(errors, sizes=None):
     """Observed orders between successive meshes; ``sizes`` the mesh sizes (default: each
     mesh halves the previous one's)."""
@@ -46,22 +61,7 @@ def orders(errors, sizes=None):
     return np.log(e[:-1] / e[1:]) / np.log(h[:-1] / h[1:])
 
 
-def mesh_size(mesh):
-    """sqrt(area / vertices): the size of an unstructured mesh."""
-    return np.sqrt(np.prod(np.ptp(mesh.p, axis=1)) / mesh.nvertices)
-
-
 # ---------------------------------------------------------------- (1) Lame cylinder
-A_IN, B_OUT, LEN, P_IN = 1.0, 2.0, 0.5, 1e8
-
-
-def lame_exact(r):
-    """Plane strain thick cylinder a < r < b, internal pressure p (T & G sec. 28)."""
-    c = P_IN * A_IN**2 / (B_OUT**2 - A_IN**2)
-    u = (1 + NU) * c / E * ((1 - 2 * NU) * r + B_OUT**2 / r)
-    return u, c * (1 - B_OUT**2 / r**2), c * (1 + B_OUT**2 / r**2), 2 * NU * c + 0 * r
-
-
 def lame_errors(mesh, element):
     s = AxisymmetricFEMSubstrate(mesh, E, NU, ALPHA, element=element,
                                  rollers={"top": "z", "bottom": "z"})
@@ -138,20 +138,6 @@ def test_free_thermal_expansion_is_stress_free(element, el):
 
 
 # ---------------------------------------------------------------- (3) radial temperature
-RB, T1 = 1.0, 80.0
-
-
-def radial_exact(r):
-    """Long solid cylinder, T = T1 (r/b)^2, plane strain, free surface (T & G sec. 150):
-    sigma_rr = C (1 - r^2/b^2), sigma_tt = C (1 - 3 r^2/b^2), C = alpha E T1 / (4 (1 - nu)),
-    sigma_zz = nu (sigma_rr + sigma_tt) - alpha E T, and u_r = r eps_tt."""
-    C = ALPHA * E * T1 / (4 * (1 - NU))
-    q = (r / RB) ** 2
-    u = (1 + NU) * ALPHA * T1 * r * ((1 - 2 * NU) + q) / (4 * (1 - NU))
-    return u, C * (1 - q), C * (1 - 3 * q), C * ((1 - q) * NU + (1 - 3 * q) * NU) - \
-        ALPHA * E * T1 * q
-
-
 @pytest.mark.parametrize("element, ns", [("P1", (8, 16, 32)), ("P2", (4, 8, 16))])
 def test_radial_temperature_long_cylinder(element, ns):
     p = int(element[1])
@@ -181,37 +167,6 @@ def test_radial_temperature_long_cylinder(element, ns):
 
 
 # ---------------------------------------------------------------- (3b) manufactured
-MB, ML, MA, MBB = 1.0, 1.5, 1e-3, 7e-4
-
-
-def mms_fields(x, lam, mu, beta, T1m=60.0):
-    """u_r = A r (b - r) sin(kz), u_z = B (b^2 - r^2) sin(kz), dT = T1 (1 + r^2/b^2)
-    cos(kz), k = pi/L on [0, b] x [0, L], clamped at r = b, z = 0, z = L.  Body force
-    f = -div sigma in cylindrical coordinates,
-    f_r = -(d_r s_rr + d_z s_rz + (s_rr - s_tt)/r), f_z = -(d_r s_rz + d_z s_zz + s_rz/r)
-    (derived by hand and checked symbolically)."""
-    r, z = x[0], x[1]
-    k = np.pi / ML
-    s, c = np.sin(k * z), np.cos(k * z)
-    b, A, B = MB, MA, MBB
-    u = np.array([A * r * (b - r) * s, B * (b**2 - r**2) * s])
-    dT = T1m * (1 + r**2 / b**2) * c
-    err, ett, ezz = A * (b - 2 * r) * s, A * (b - r) * s, B * (b**2 - r**2) * k * c
-    g = A * (b * r - r**2) * k * c - 2 * B * r * s
-    tr = err + ett + ezz
-    sig = np.array([lam * tr + 2 * mu * err - beta * dT, lam * tr + 2 * mu * ezz - beta * dT,
-                    lam * tr + 2 * mu * ett - beta * dT, mu * g])  # rr, zz, tt, rz
-    dtr_r = -3 * A * s - 2 * B * k * r * c
-    dtr_z = A * (2 * b - 3 * r) * k * c - B * k**2 * (b**2 - r**2) * s
-    ddT_r, ddT_z = T1m * 2 * r / b**2 * c, -T1m * (1 + r**2 / b**2) * k * s
-    fr = -(lam * dtr_r - 4 * mu * A * s - beta * ddT_r
-           + mu * (-A * (b * r - r**2) * k**2 * s - 2 * B * r * k * c) - 2 * mu * A * s)
-    fz = -(mu * (A * (b - 2 * r) * k * c - 2 * B * s) + lam * dtr_z
-           - 2 * mu * B * k**2 * (b**2 - r**2) * s - beta * ddT_z
-           + mu * (A * (b - r) * k * c - 2 * B * s))
-    return u, dT, sig, np.array([fr, fz])
-
-
 @pytest.mark.parametrize("mesh_type", [MeshTri, MeshQuad])
 @pytest.mark.parametrize("element, ns", [("P1", (8, 16, 32)), ("P2", (4, 8, 16))])
 def test_manufactured_all_four_components(element, ns, mesh_type):
@@ -318,15 +273,6 @@ def test_bad_input():
 
 
 # ---------------------------------------------------------------- uniform pressure, half-space
-def love_axis(z, p, a):
-    """Uniform pressure p on r < a of an elastic half-space, stresses on the axis at depth
-    z (Love 1929; Johnson, Contact Mechanics, 1985, sec. 3.4):
-    sigma_zz = -p (1 - q^3), sigma_rr = sigma_tt = -p/2 ((1 + 2 nu) - 2 (1 + nu) q + q^3),
-    q = z / sqrt(a^2 + z^2); centre deflection 2 (1 - nu^2) p a / E."""
-    q = z / np.sqrt(a * a + z * z)
-    return -p * (1 - q**3), -0.5 * p * ((1 + 2 * NU) - 2 * (1 + NU) * q + q**3)
-
-
 def test_uniform_circular_pressure_on_a_half_space():
     """A clamped block 100 a deep and wide stands for the half-space (the centre
     deflection is short by about a / L: measured 0.62 %); P2 quads with h = a/8 within 3a,
