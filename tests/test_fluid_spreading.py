@@ -147,3 +147,23 @@ def test_disc_spread_ratio_by_hand():
     assert sp.disc_spread_ratio(1.0 / 12.0) == pytest.approx(math.sqrt(8.0), rel=1e-12)
     # beta = 6 needs h = 2 D / (3 * 36) = D / 54
     assert sp.disc_spread_ratio(1.0 / 54.0) == pytest.approx(6.0, rel=1e-12)
+
+
+def test_link_keeps_the_connected_sheet_and_area_diameter():
+    dx = 0.01
+    radius = 0.2
+    sheet = _lamella_3d(radius, dx, layers=1)
+    # broken-off particles on the wall, 3 dx apart, out to twice the radius
+    xl = radius + 3 * dx * np.arange(1, 6)
+    loose = np.column_stack([xl, np.zeros(5), np.full(5, 0.5 * dx)])
+    x = np.vstack([sheet, loose])
+    everything = sp.contact_diameter(x, 0.0, dx, center=(0.0, 0.0))
+    assert everything == pytest.approx(2 * (loose[:, 0].max() + 0.5 * dx))
+    # links up to 2 dx join the lattice (spacing dx, diagonal 1.41 dx) but not the loose ones
+    assert abs(sp.contact_diameter(x, 0.0, dx, link=2.0, center=(0.0, 0.0))
+               - 2 * radius) <= dx
+    # area: N dx^2 = pi D^2 / 4 for the lattice disc (to the cells cut by the circle)
+    assert sp.area_diameter(sheet, 0.0, dx) == pytest.approx(2 * radius, rel=0.03)
+    # 2D: the wetted length
+    xs = np.column_stack([(np.arange(7) + 0.5) * dx, np.full(7, 0.4 * dx)])
+    assert sp.area_diameter(xs, 0.0, dx) == pytest.approx(7 * dx)

@@ -22,7 +22,13 @@ heat, no substrate.  Each case varies one numerical choice from the base case
 The droplet starts gap = R above the wall; time is counted from contact, t_contact = gap / v,
 in units of tc = D / v; each run goes to 4 tc after contact.  Every 0.05 tc the wetted
 diameter (:func:`sphfem.fluid.spreading.contact_diameter`: fluid particles within one
-spacing of the wall) is recorded; D_max is its largest value.  One JSON per case
+spacing of the wall) is recorded three ways: ``edge`` (the outermost such particle),
+``sheet`` (the outermost particle of the largest sheet joined by gaps < 2 dx: the lamella
+without the particles and fingers that broke off it; the figure used below) and ``area``
+(the disc of the wetted area, N dx^2); D_max is the largest value over time.  Fluid
+particles flung beyond 5 D from the axis or 4 D above the wall (ejecta sliding off the
+wall's edge at 3.5 D) are taken out of the run (kind GHOST, at rest, counted), so they
+cannot stop it by leaving the domain.  One JSON per case
 (``DIR/<case>.json``; an existing one is kept, so an interrupted study resumes).
 ``--report`` writes ``results.json``, ``table.md`` and ``spreading.png`` (D_max / D against
 Re with the correlations at the physical We) into the given folder.
@@ -130,6 +136,7 @@ def run_case(name: str) -> dict:
     import contextlib
 
     from sphfem.fluid.spreading import (
+        area_diameter,
         artificial_nu,
         contact_diameter,
         correlation_table,
@@ -137,7 +144,7 @@ def run_case(name: str) -> dict:
         reynolds,
         weber,
     )
-    from sphfem.particles import FLUID
+    from sphfem.particles import FLUID, GHOST
     from sphfem.scene import parse_scene
     from sphfem.simulation import Simulation, SimulationStopped
 
@@ -152,7 +159,8 @@ def run_case(name: str) -> dict:
         sim = Simulation(scene)
         setup_s = time.perf_counter() - t0
         ps = sim.particles
-        times, diam = [], []
+        times, diam = [], {"edge": [], "sheet": [], "area": []}
+        removed = 0
         next_m = t_contact
         status, message = "completed", ""
         t_end = scene.time.t_end
@@ -163,9 +171,18 @@ def run_case(name: str) -> dict:
                 dt = min(dt, t_end - sim.t, max(next_m - sim.t, 1e-300))
                 sim.step(dt)
                 sim.check_state()
+                x = ps.x
+                out = (ps.kind == FLUID) & ((x[:, 0] ** 2 + x[:, 1] ** 2 > (5 * D) ** 2)
+                                            | (x[:, 2] > 4 * D))
+                if out.any():
+                    ps.kind[out] = GHOST
+                    ps.v[out] = 0.0
+                    removed += int(out.sum())
                 if sim.t >= next_m * (1 - 1e-12):
                     times.append((sim.t - t_contact) / tc)
-                    diam.append(contact_diameter(ps.x, 0.0, dx, ps.kind) / D)
+                    diam["edge"].append(contact_diameter(x, 0.0, dx, ps.kind) / D)
+                    diam["sheet"].append(contact_diameter(x, 0.0, dx, ps.kind, link=2.0) / D)
+                    diam["area"].append(area_diameter(x, 0.0, dx, ps.kind) / D)
                     next_m += EVERY_TC * tc
         except SimulationStopped as e:
             status, message = "stopped", str(e)
@@ -176,18 +193,22 @@ def run_case(name: str) -> dict:
     We = weber(RHO, v, D, SIGMA) if c["st"] != "none" else math.inf
     Re = reynolds(RHO, v, D, MU)
     Re_eff = effective_reynolds(v, D, nu, nu_art)
-    diam = np.asarray(diam)
-    k = int(np.argmax(diam)) if diam.size else -1
-    fl = ps.kind == FLUID
-    return {
-        "case": name, "params": c, "dx": dx, "n_fluid": int(fl.sum()), "n": int(ps.n),
+    res = {
+        "case": name, "params": c, "dx": dx, "n_fluid": int((ps.kind == FLUID).sum()),
+        "n": int(ps.n), "removed": removed,
         "status": status, "message": message, "steps": sim.step_count,
         "setup_s": setup_s, "wall_s": wall_s,
-        "We": We, "Re": Re, "nu_art": nu_art, "Re_eff": Re_eff,
-        "t_over_tc": times, "D_over_D0": diam.tolist(),
-        "beta_max": float(diam[k]) if k >= 0 else None,
-        "t_max_tc": float(times[k]) if k >= 0 else None,
-        "max_at_end": bool(k == len(diam) - 1),
+        "We": We, "Re": Re, "nu_art": nu_art, "Re_eff": Re_eff, "t_over_tc": times}
+    for key, series in diam.items():
+        a = np.asarray(series)
+        k = int(np.argmax(a)) if a.size else -1
+        res[f"D_{key}_over_D0"] = a.tolist()
+        res[f"beta_{key}"] = float(a[k]) if k >= 0 else None
+        res[f"t_{key}_tc"] = float(times[k]) if k >= 0 else None
+        res[f"{key}_max_at_end"] = bool(k == len(a) - 1)
+    return res | {
+        "beta_max": res["beta_sheet"], "t_max_tc": res["t_sheet_tc"],
+        "max_at_end": res["sheet_max_at_end"],
         "correlations_physical": correlation_table(We if math.isfinite(We) else 1e12, Re),
         "correlations_effective": correlation_table(We if math.isfinite(We) else 1e12,
                                                     Re_eff),
@@ -214,7 +235,8 @@ _SHORT = {"pasandideh-fard-1996": "PF96", "ukiwe-kwok-2005": "UK05", "clanet-200
 def table(rows: list[dict]) -> str:
     """Markdown table of the cases: D_max / D, its time, Re_eff and the correlations."""
     names = list(_SHORT)
-    head = ("| case | v m/s | D/dx | alpha | wall | ST | Re_eff | D_max/D | t_max/tc | "
+    head = ("| case | v m/s | D/dx | alpha | wall | ST | Re_eff | D_max/D sheet | t_max/tc | "
+            "edge | area | removed | "
             + " | ".join(f"{_SHORT[n]} Re" for n in names) + " | "
             + " | ".join(f"{_SHORT[n]} Re_eff" for n in names) + " | steps | wall s |")
     sep = "|" + "---|" * (head.count("|") - 1)
@@ -227,6 +249,8 @@ def table(rows: list[dict]) -> str:
         lines.append(
             f"| {r['case']}{stop} | {p['v']:g} | {p['n']} | {p['alpha']:g} | {p['wall']} | "
             f"{p['st']} | {r['Re_eff']:.0f} | {bm:.2f}{end} | {r['t_max_tc']:.2f} | "
+            f"{r['beta_edge']:.2f}{'*' if r['edge_max_at_end'] else ''} | "
+            f"{r['beta_area']:.2f}{'*' if r['area_max_at_end'] else ''} | {r['removed']} | "
             + " | ".join(f"{r['correlations_physical'][n]:.2f}" for n in names) + " | "
             + " | ".join(f"{r['correlations_effective'][n]:.2f}" for n in names)
             + f" | {r['steps']} | {r['wall_s']:.0f} |")

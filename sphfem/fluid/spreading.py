@@ -36,8 +36,10 @@ the paper here), nor are experimental points: this module holds no measured data
 Measurement (:func:`contact_diameter`, :func:`max_spreading`): the wetted (contact-line)
 diameter of a frame is twice the largest distance from the impact axis of the fluid
 particles lying within ``within`` particle spacings above the wall, plus one spacing (each
-particle stands for a cell of width dx, so the fluid reaches dx/2 beyond its centre); the
-maximum spreading is the largest wetted diameter over the frames.
+particle stands for a cell of width dx, so the fluid reaches dx/2 beyond its centre),
+optionally over the largest connected sheet only (``link``); :func:`area_diameter` is the
+diameter of a disc with the wetted area.  The maximum spreading is the largest wetted
+diameter over the frames.
 
 Artificial viscosity: the Monaghan (1992) term with pair coefficient alpha h c0 acts in the
 continuum limit as a kinematic viscosity nu_art = alpha h c0 / (2 (d + 2)) (Monaghan 2005,
@@ -199,31 +201,66 @@ def correlation_table(We: float, Re: float, theta_deg: float = 90.0) -> dict[str
 # measurement
 
 
+def _contact_layer(x, wall_level, dx, kind, axis, within):
+    """Lateral coordinates of the fluid rows with -dx/2 <= height < within dx."""
+    x = np.asarray(x, float)
+    if x.ndim != 2:
+        raise ValueError(f"x: expected an (n, dim) array, got shape {x.shape}")
+    axis = axis % x.shape[1]
+    sel = np.ones(len(x), bool) if kind is None else (np.asarray(kind) == FLUID_KIND)
+    height = x[:, axis] - wall_level
+    sel &= (height >= -0.5 * dx) & (height < within * dx)
+    return np.delete(x[sel], axis, axis=1)
+
+
+def _largest_cluster(lateral, link):
+    """Rows of the largest group of points joined by links shorter than ``link``."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    from scipy.spatial import cKDTree
+
+    pairs = cKDTree(lateral).query_pairs(link, output_type="ndarray")
+    n = len(lateral)
+    g = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
+    _, labels = connected_components(g, directed=False)
+    return lateral[labels == np.bincount(labels).argmax()]
+
+
 def contact_diameter(x, wall_level: float, dx: float, kind=None, *, axis: int = -1,
-                     within: float = 1.0, center=None) -> float:
+                     within: float = 1.0, center=None, link: float | None = None) -> float:
     """Wetted diameter of one frame [m]: 2 (max_i r_i + dx / 2) over the fluid particles i
-    with 0 <= (x_i[axis] - wall_level) < within dx, r_i their distance from the impact axis.
+    with -dx/2 <= (x_i[axis] - wall_level) < within dx, r_i their distance from the impact
+    axis.
 
     ``x``: (n, dim) positions; ``kind``: particle kinds (only FLUID rows count; None: all
     rows are fluid); ``wall_level``: the wall surface along ``axis`` (the normal, pointing
     into the fluid); ``center``: the impact axis' position in the other coordinates
-    (default: the mean of the selected particles).  0 when no fluid particle touches the
-    wall.  In 2D the "diameter" is the wetted length.
+    (default: the mean of the counted particles).  ``link`` (in units of dx): count only
+    the largest sheet of wall-layer particles joined by gaps shorter than link dx, which
+    leaves out single particles and fingers that have broken off the lamella.  0 when no
+    fluid particle touches the wall.  In 2D the "diameter" is the wetted length.
     """
-    x = np.asarray(x, float)
-    if x.ndim != 2:
-        raise ValueError(f"x: expected an (n, dim) array, got shape {x.shape}")
-    dim = x.shape[1]
-    axis = axis % dim
-    sel = np.ones(len(x), bool) if kind is None else (np.asarray(kind) == FLUID_KIND)
-    height = x[:, axis] - wall_level
-    sel &= (height >= -0.5 * dx) & (height < within * dx)
-    if not sel.any():
+    lateral = _contact_layer(x, wall_level, dx, kind, axis, within)
+    if not len(lateral):
         return 0.0
-    lateral = np.delete(x[sel], axis, axis=1)
+    if link is not None and len(lateral) > 1:
+        lateral = _largest_cluster(lateral, link * dx)
     c = lateral.mean(axis=0) if center is None else np.asarray(center, float)
     r = np.sqrt(((lateral - c) ** 2).sum(axis=1))
     return float(2.0 * (r.max() + 0.5 * dx))
+
+
+def area_diameter(x, wall_level: float, dx: float, kind=None, *, axis: int = -1,
+                  within: float = 1.0) -> float:
+    """Diameter of the disc with the wetted area [m]: each fluid particle of the wall layer
+    (as in :func:`contact_diameter`) wets dx^(d-1), so A = N dx^2 and D = 2 sqrt(A / pi)
+    in 3D (in 2D the wetted length N dx).  Unlike the contact line it does not grow when
+    the lamella breaks into scattered particles."""
+    lateral = _contact_layer(x, wall_level, dx, kind, axis, within)
+    n = len(lateral)
+    if lateral.shape[1] == 1:
+        return float(n * dx)
+    return float(2.0 * math.sqrt(n * dx * dx / math.pi))
 
 
 @dataclass(frozen=True)
