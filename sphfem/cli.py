@@ -193,6 +193,7 @@ def _cmd_run(args) -> int:
     """``sphfem run``: :func:`sphfem.api.run`, with the command line's wording and exit codes."""
     from sphfem import api
     from sphfem.errors import OutputExistsError, OutputFolderError, SceneError
+    from sphfem.jit_warmup import warm_up
     from sphfem.output import prepare_output_dir
     from sphfem.simulation import format_summary
 
@@ -201,6 +202,9 @@ def _cmd_run(args) -> int:
         # refused in the command line's words (--overwrite); api.run checks again (a no-op)
         prepare_output_dir(args.out, check_only=True, overwrite=args.overwrite,
                            resume=args.resume)
+        # a cold numba cache: compile in a child first, so this process never holds the
+        # compiler's memory (issue 14; sphfem/jit_warmup.py)
+        warm_up(scene, progress=not args.no_progress)
         res = api.run(scene, args.out, overwrite=args.overwrite, resume=args.resume,
                       progress=not args.no_progress, keep_checkpoint=args.keep_checkpoint)
     except (SceneError, OutputExistsError, OutputFolderError) as e:

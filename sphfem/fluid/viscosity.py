@@ -26,6 +26,7 @@ from sphfem.methods import MethodRegistry
 #: the viscosity-model modules, in the order of the ``viscosity`` choices (one line each)
 METHOD_MODULES = (
     "sphfem.fluid.viscosity_laminar_shao2003",
+    "sphfem.fluid.viscosity_morris1997",
 )
 
 
