@@ -159,8 +159,9 @@ def is_warm(scene) -> bool:
     return True
 
 
-def warm_up(scene, coarsen: float = 3.0, steps: int = 100) -> dict:
-    """Compile ``scene``'s kernels in a child process unless numba's cache holds them.
+def warm_up(scene, coarsen: float = 3.0, steps: int = 100, progress: bool = False) -> dict:
+    """Compile ``scene``'s kernels in a child process unless numba's cache holds them
+    (``progress``: say so on stderr, :mod:`sphfem.progress`).
 
     Returns what happened: ``{"cold": False}`` when the cache was warm (or the warm-up is
     off: ``$SPHFEM_JIT_WARMUP=0``, or numba's cache is disabled), else ``{"cold": True,
@@ -173,7 +174,7 @@ def warm_up(scene, coarsen: float = 3.0, steps: int = 100) -> dict:
         return {"cold": False, "skipped": True}
     if is_warm(scene):
         return {"cold": False}
-    from sphfem.progress import stage
+    from sphfem import progress as report
 
     t0 = time.perf_counter()
     info = {"cold": True, "ok": False}
@@ -182,10 +183,16 @@ def warm_up(scene, coarsen: float = 3.0, steps: int = 100) -> dict:
         src.write_text(json.dumps({"scene": coarsened(scene, coarsen, steps),
                                    "manifest": str(manifest_path(scene)),
                                    "out": str(Path(tmp) / "out")}))
-        with stage("compiling numba kernels in a child process on a coarsened copy of the "
-                   "scene (first run only; later runs load them from the cache)"):
-            r = subprocess.run([sys.executable, "-m", "sphfem.jit_warmup", str(src)],
-                               capture_output=True, text=True)
+        was = report.enabled()
+        report.enable(progress or was)
+        try:
+            with report.stage("compiling numba kernels in a child process on a coarsened copy "
+                              "of the scene (first run only; later runs load them from the "
+                              "cache)"):
+                r = subprocess.run([sys.executable, "-m", "sphfem.jit_warmup", str(src)],
+                                   capture_output=True, text=True)
+        finally:
+            report.enable(was)
         try:
             info.update(json.loads(r.stdout.strip().splitlines()[-1]))
             info["ok"] = r.returncode == 0
