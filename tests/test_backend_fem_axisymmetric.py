@@ -71,6 +71,23 @@ def test_ring_forces_equal_the_pressure_patch():
     assert sub.n_factorizations == 1
 
 
+def test_write_series(tmp_path):
+    """One VTU frame of the (r, z) mesh (points (r, z, 0)) with the hoop stress in the
+    tensor's third diagonal entry, and the .pvd listing it."""
+    import meshio
+
+    sub = substrate(clamps=["bottom"])
+    back = make_backend("fem-axisymmetric", substrate=sub, temperature_map="off")
+    back.apply([[0.0, 0.0], [0.05, 0.0]], [[0.0, -1e3], [0.0, -2e3]])
+    res = back.solve(0.0)
+    path = back.write(0.0, tmp_path)
+    m = meshio.read(path)
+    assert m.points.shape == (sub.mesh.nvertices, 3) and np.all(m.points[:, 2] == 0)
+    assert np.allclose(m.point_data["stress"].reshape(-1, 3, 3)[:, 2, 2],
+                       res.result.stress_nodes[:, 2, 2])
+    assert (tmp_path / "substrate.pvd").is_file()
+
+
 def test_uniform_temperature_through_the_map_is_stress_free():
     """Region particles on a lattice covering the (r, z) section at T0 + dT (vol = cell
     areas): the MLS map gives dT at every node, the free disc expands without stress and
