@@ -26,9 +26,9 @@ spacing of the wall) is recorded three ways: ``edge`` (the outermost such partic
 ``sheet`` (the outermost particle of the largest sheet joined by gaps < 2 dx: the lamella
 without the particles and fingers that broke off it; the figure used below) and ``area``
 (the disc of the wetted area, N dx^2); D_max is the largest value over time.  Fluid
-particles flung beyond 5 D from the axis or 4 D above the wall (ejecta sliding off the
-wall's edge at 3.5 D) are taken out of the run (kind GHOST, at rest, counted), so they
-cannot stop it by leaving the domain.  One JSON per case
+particles beyond the wall's edge (3.5 D from the axis, less a support radius), 4 D above
+the wall or below its top (ejecta sliding off the edge) are taken out of the run (kind
+GHOST, at rest, counted), so they cannot stop it by leaving the domain.  One JSON per case
 (``DIR/<case>.json``; an existing one is kept, so an interrupted study resumes).
 ``--report`` writes ``results.json``, ``table.md`` and ``spreading.png`` (D_max / D against
 Re with the correlations at the physical We) into the given folder.
@@ -52,6 +52,7 @@ D = 0.1e-3
 RHO, MU, SIGMA = 1000.0, 3.0e-4, 0.072
 T_TC = 4.0          # run length after contact [tc]
 EVERY_TC = 0.05     # measurement interval [tc]
+WALL_HALF = 3.5 * D  # half-width of the wall: it covers D_max / D <= 7
 
 BASE = dict(v=50.0, n=12, alpha=0.02, c0=500.0, delta=0.1, wall="noslip", st="csf")
 CASES = {
@@ -80,13 +81,12 @@ def scene_dict(c: dict) -> dict:
     """The fluid-only impact scene of case parameters ``c``."""
     dx = D / c["n"]
     R = 3.0 * dx
-    wall_half = 3.5 * D  # the wall covers D_max / D <= 7
     layers = 3           # R / dx: the support of the first fluid layer is covered
     half = 6.0 * D
     return {
         "scene": {"name": "spreading", "dim": 3, "seed": 1,
                   "description": f"fluid-only droplet impact, {c}"},
-        "domain": {"lo": [-half, -half, -layers * dx], "hi": [half, half, 5.0 * D]},
+        "domain": {"lo": [-half, -half, -D], "hi": [half, half, 5.0 * D]},
         "sph": {"kernel": "wendland_c2", "dx": dx, "support_factor": 3.0},
         "materials": {
             "water": {"rho0": RHO, "mu": MU, "c0": c["c0"], "sigma": SIGMA},
@@ -94,7 +94,7 @@ def scene_dict(c: dict) -> dict:
         },
         "blocks": [
             {"name": "wall", "shape": "box", "kind": "wall", "material": "wall",
-             "lo": [-wall_half, -wall_half, -layers * dx], "hi": [wall_half, wall_half, 0.0]},
+             "lo": [-WALL_HALF, -WALL_HALF, -layers * dx], "hi": [WALL_HALF, WALL_HALF, 0.0]},
             {"name": "droplet", "shape": "sphere", "kind": "fluid", "material": "water",
              "sampling": "poisson", "center": [0.0, 0.0, 0.0], "radius": D / 2,
              "above": "wall", "gap": R, "velocity": [0.0, 0.0, -c["v"]]},
@@ -161,6 +161,7 @@ def run_case(name: str) -> dict:
         ps = sim.particles
         times, diam = [], {"edge": [], "sheet": [], "area": []}
         removed = 0
+        r_off = WALL_HALF - scene.support_radius
         next_m = t_contact
         status, message = "completed", ""
         t_end = scene.time.t_end
@@ -172,8 +173,8 @@ def run_case(name: str) -> dict:
                 sim.step(dt)
                 sim.check_state()
                 x = ps.x
-                out = (ps.kind == FLUID) & ((x[:, 0] ** 2 + x[:, 1] ** 2 > (5 * D) ** 2)
-                                            | (x[:, 2] > 4 * D))
+                out = (ps.kind == FLUID) & ((x[:, 0] ** 2 + x[:, 1] ** 2 > r_off ** 2)
+                                            | (x[:, 2] > 4 * D) | (x[:, 2] < 0.0))
                 if out.any():
                     ps.kind[out] = GHOST
                     ps.v[out] = 0.0
