@@ -84,6 +84,7 @@ from __future__ import annotations
 import math
 
 import numpy as np
+from scipy.spatial import cKDTree
 from scipy.special import erf
 
 from sphfem.fem.heat_transient import ierfc
@@ -317,8 +318,6 @@ class _SurfaceShape:
             self.c = c[order]
             self.idx = order
             return
-        from skfem import MeshTri1
-
         fac = pos[mesh.facets[:, mesh.boundaries[sub.flux_group]]]
         pl = mesh.p[np.ix_(lat, nodes)]
         if fac.shape[0] == 3:
@@ -330,7 +329,7 @@ class _SurfaceShape:
             tri = np.hstack([q[[0, 1, 2]], q[[0, 2, 3]]])
         self.tri = tri
         self.pl = pl
-        self.finder = MeshTri1(pl, tri).element_finder()
+        self.tree = cKDTree(pl[:, tri].mean(axis=1).T)
 
     def __call__(self, Y):
         import scipy.sparse as sp
@@ -346,14 +345,40 @@ class _SurfaceShape:
             cols = np.concatenate([self.idx[i - 1], self.idx[i]])
             vals = np.concatenate([1.0 - t, t])
         else:
-            e = self.finder(Y[:, 0], Y[:, 1])
-            v = self.pl[:, self.tri[:, e]]  # (2, 3, m)
-            d1, d2 = v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]
-            r = Y.T - v[:, 0]
-            det = d1[0] * d2[1] - d1[1] * d2[0]
-            l1 = (r[0] * d2[1] - r[1] * d2[0]) / det
-            l2 = (d1[0] * r[1] - d1[1] * r[0]) / det
+            e, lam = self._locate(Y)
             rows = np.tile(np.arange(m), 3)
             cols = self.tri[:, e].ravel()
-            vals = np.concatenate([1.0 - l1 - l2, l1, l2])
+            vals = lam.T.ravel()
         return sp.coo_matrix((vals, (rows, cols)), shape=(m, self.n))
+
+    def _bary(self, Y, e):
+        v = self.pl[:, self.tri[:, e]]  # (2, 3, m)
+        d1, d2 = v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]
+        r = Y.T - v[:, 0]
+        det = d1[0] * d2[1] - d1[1] * d2[0]
+        l1 = (r[0] * d2[1] - r[1] * d2[0]) / det
+        l2 = (d1[0] * r[1] - d1[1] * r[0]) / det
+        return np.column_stack([1.0 - l1 - l2, l1, l2])
+
+    def _locate(self, Y, k: int = 8):
+        """Triangle and barycentric coordinates of each point: the first of its ``k``
+        nearest triangles (by centroid) that contains it; a point in none (round-off at
+        the surface's edge) takes the candidate it is least outside of, its coordinates
+        clipped to >= 0 and renormalised (the partition of unity holds either way)."""
+        m = Y.shape[0]
+        k = min(k, self.tri.shape[1])
+        _, cand = self.tree.query(Y, k)
+        cand = np.asarray(cand).reshape(m, k)
+        best_e = cand[:, 0].copy()
+        best_lam = self._bary(Y, best_e)
+        best_min = best_lam.min(axis=1)
+        for j in range(1, k):
+            todo = np.flatnonzero(best_min < -1e-12)
+            if todo.size == 0:
+                break
+            lam = self._bary(Y[todo], cand[todo, j])
+            better = lam.min(axis=1) > best_min[todo]
+            t = todo[better]
+            best_e[t], best_lam[t], best_min[t] = cand[t, j], lam[better], lam[better].min(1)
+        lam = np.maximum(best_lam, 0.0)
+        return best_e, lam / lam.sum(axis=1, keepdims=True)

@@ -26,9 +26,13 @@ step is
 
 so with H0 = H the exchange is implicit (backward Euler in T) and with H0 = 0 explicit;
 for H <= H0 + C/dt (C the node's heat capacity) the update of an isolated node is
-monotone (T never overshoots T_ext).  The matrix of (1) is factorised once per
-(theta, dt, H0) with SuperLU and re-used; :class:`TransientHeat` refactorises only when
-the caller's H leaves the band [H0 / ``robin_ratio``, H0 + C / dt] (see :meth:`step`).
+monotone (T never overshoots T_ext).  Against the implicit update, an isolated node's
+increment is off by the factor (C/dt + H)/(C/dt + H0), so the lag is bounded by
+|H - H0| / (C/dt + H0).  The matrix of (1) is factorised once per (theta, dt, H0) with
+SuperLU (symmetric-mode minimum-degree ordering: the matrix is symmetric) and re-used;
+:class:`TransientHeat` sets H0 = H (a new factorisation) only when some node has
+|H - H0| > ``robin_tol`` (C/dt + H0), or H = 0 < H0 (a node that stopped exchanging
+must take in nothing), see :meth:`step`.
 
 Conservation: K 1 = 0 (constants lie in the kernel of the conduction form) and K is
 symmetric, so with no Dirichlet nodes 1^T M (T^{n+1} - T^n) = dt 1^T F exactly: the
@@ -148,7 +152,7 @@ class TransientHeat:
     def __init__(self, mesh, k: float, rho: float, c: float, T0: float = 0.0, *,
                  axisymmetric: bool = False, flux_group: str = "top", dirichlet=None,
                  theta: float = 1.0, startup: int = 1, element=None,
-                 robin_ratio: float = 2.0, lumped: bool = True):
+                 robin_tol: float = 0.1, lumped: bool = True):
         if not 0.5 <= theta <= 1.0:
             raise ValueError(f"TransientHeat: theta must lie in [0.5, 1], got {theta}")
         self.mesh = mesh
@@ -158,7 +162,7 @@ class TransientHeat:
         self.axisymmetric = axisymmetric
         self.theta = float(theta)
         self.startup = startup if theta < 1.0 else 0
-        self.robin_ratio = float(robin_ratio)
+        self.robin_tol = float(robin_tol)
         self.basis = Basis(mesh, element if element is not None else mesh.elem())
         if flux_group not in (mesh.boundaries or {}):
             raise ValueError(f"TransientHeat: mesh has no facet group {flux_group!r}")
@@ -262,7 +266,8 @@ class TransientHeat:
             if len(self._lu) >= 4:
                 self._lu.pop(next(iter(self._lu)))
             AID = A[self.I][:, self.D] if self.D.size else None
-            lu = (splu(A[self.I][:, self.I].tocsc()), AID)
+            lu = (splu(A[self.I][:, self.I].tocsc(), permc_spec="MMD_AT_PLUS_A",
+                       options={"SymmetricMode": True}), AID)
             self._lu[key] = lu
             self.factorisations += 1
         return lu
@@ -273,11 +278,12 @@ class TransientHeat:
         self._lu = {k: v for k, v in self._lu.items() if k[2] == self._h0_key}
 
     def _robin_band(self, H, dt) -> bool:
-        """True when H lies in [H0 / robin_ratio, H0 + C/dt] on every surface dof."""
+        """True when the factorised H0 may stay: |H - H0| <= robin_tol (C/dt + H0) on
+        every surface dof, and no dof with H = 0 < H0."""
         C = self.capacity_lumped[self.surface_dofs]
-        hi = H <= self.H0 + C / dt
-        lo = (H >= self.H0 / self.robin_ratio) | (self.H0 == 0.0)
-        return bool(np.all(hi & lo))
+        near = np.abs(H - self.H0) <= self.robin_tol * (C / dt + self.H0)
+        dried = (H == 0.0) & (self.H0 > 0.0)
+        return bool(np.all(near & ~dried))
 
     def _substep(self, theta, dt, P, H, T_ext) -> np.ndarray:
         s = self.surface_dofs
@@ -312,7 +318,8 @@ class TransientHeat:
         :meth:`nodal_power` of a flux density.  ``robin``: ``(H, T_ext)`` with H [W/K] per
         surface dof (h_a A_a) and the external temperature(s) [K]: the exchange
         H (T_ext - T) is taken implicitly through the factorised H0, which is reset to H
-        (one new factorisation) when H leaves [H0 / robin_ratio, H0 + C/dt].
+        (one new factorisation) when |H - H0| > robin_tol (C/dt + H0) on some dof or a
+        dof's H fell to 0.
         """
         H = T_ext = None
         if robin is not None:
