@@ -62,10 +62,10 @@ def wall(dx, dim, half_width, layers=3):
 
 #: columns of a history row
 COLUMNS = ("t/tc", "2 max r/D", "r_rms/D", "2 r50/D", "2 r90/D", "2 r99/D", "2 r_wall/D",
-           "h_top/D", "max|v|/V")
+           "h_top/D", "max|v|/V", "z_min/dx", "p_min/(rho V^2)")
 
 
-def record(t, r, z, m, v, dx):
+def record(t, r, z, m, v, dx, p):
     """One history row (:data:`COLUMNS`): radii over the fluid's mass (r_rms = sqrt(sum m r^2
     / sum m); rq the radius holding q % of the mass), r_wall the largest r of a particle within
     1.5 dx of the wall (z < 1.5 dx), h_top the largest z (droplet top)."""
@@ -76,7 +76,7 @@ def record(t, r, z, m, v, dx):
     rw = r[near].max() if near.any() else 0.0
     return (t / T_C, 2 * r.max() / D, math.sqrt((m * r * r).sum() / m.sum()) / D,
             *(2 * q / D for q in rq), 2 * rw / D, z.max() / D,
-            float(np.sqrt((v * v).sum(axis=1)).max()) / V)
+            float(np.sqrt((v * v).sum(axis=1)).max()) / V, z.min() / dx, p.min() / (RHO * V * V))
 
 
 def run_axi(dx, t_end_tc, half_width):
@@ -95,7 +95,7 @@ def run_axi(dx, t_end_tc, half_width):
 
     def rec(s):
         fl = s.fluid
-        hist.append(record(s.t, s.x[fl, 0], s.x[fl, 1], s.M[fl], s.v[fl], dx))
+        hist.append(record(s.t, s.x[fl, 0], s.x[fl, 1], s.M[fl], s.v[fl], dx, s.p[fl]))
 
     rec(f)
     f.run(t_end_tc * T_C, rec, every=0.1 * T_C)
@@ -122,7 +122,7 @@ def run_3d(dx, t_end_tc, half_width):
         fl = sol.p.kind == FLUID
         x = sol.p.x[fl]
         hist.append(record(sol.t, np.hypot(x[:, 0], x[:, 1]), x[:, 2], sol.p.m[fl],
-                           sol.p.v[fl], dx))
+                           sol.p.v[fl], dx, sol.p.p[fl]))
 
     rec(s)
     s.run(t_end_tc * T_C, rec, every=0.1 * T_C)

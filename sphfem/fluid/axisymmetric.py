@@ -80,7 +80,7 @@ def _isfluid(k):
 
 
 @njit(cache=True, parallel=True)
-def wall_state(x, v, rho, p, kind, offsets, indices, R, kcode, Lz, gravity, rho0, B, gamma,
+def wall_state(x, v, rho, p, A, kind, offsets, indices, R, kcode, Lz, gravity, rho0, B, gamma,
                vg):
     """Adami wall pressure, density and ghost velocity of the real WALL rows (planar kernel
     in the meridian plane; walls at rest, no prescribed acceleration)."""
@@ -102,7 +102,7 @@ def wall_state(x, v, rho, p, kind, offsets, indices, R, kcode, Lz, gravity, rho0
             d2 = r0 * r0 + r1 * r1
             if d2 >= R2:
                 continue
-            w = kernels.kernel_f(math.sqrt(d2) / R, kcode)
+            w = kernels.kernel_f(math.sqrt(d2) / R, kcode) * A[j]
             sw += w
             sp += p[j] * w
             sh += rho[j] * w * (gravity[0] * r0 + gravity[1] * r1)
@@ -123,7 +123,7 @@ def wall_state(x, v, rho, p, kind, offsets, indices, R, kcode, Lz, gravity, rho0
 
 @njit(cache=True, parallel=True)
 def gradients(x, rho, vg, A, kind, offsets, indices, R, sigma, kcode, Lz, cond_max, grad_rho,
-              dvdr):
+              dvdr, shep):
     """Renormalised <grad rho>, <d_r (v_r / r)> and <d_r v_z> (``dvdr[:, 0]``, ``[:, 1]``)
     of the real FLUID rows.
 
@@ -147,6 +147,7 @@ def gradients(x, rho, vg, A, kind, offsets, indices, R, sigma, kcode, Lz, cond_m
         a0 = 0.0  # sum A F (q_j - q_i) r_ij, q = v_r / r
         a1 = 0.0
         qi = vg[i, 0] / x[i, 0]
+        shep[i] = A[i] * sigma  # Shepard sum, self included
         b0 = 0.0  # sum A F (v_z,j - v_z,i) r_ij
         b1 = 0.0
         for jj in range(offsets[i], offsets[i + 1]):
@@ -171,6 +172,7 @@ def gradients(x, rho, vg, A, kind, offsets, indices, R, sigma, kcode, Lz, cond_m
             u = s * (vg[j, 1] - vg[i, 1])
             b0 += u * r0
             b1 += u * r1
+            shep[i] += A[j] * sigma * kernels.kernel_f(d / R, kcode)
         good, c00, c01, c02, c10, c11, c12, c20, c21, c22 = invert_sym3(
             m00, m01, 0.0, m11, 0.0, 1.0, 2, cond_max)
         if good:
@@ -187,9 +189,10 @@ def gradients(x, rho, vg, A, kind, offsets, indices, R, sigma, kcode, Lz, cond_m
 
 @njit(cache=True, parallel=True)
 def forces(x, v, vg, rho, p, A, mt, mu, kind, grad_rho, dvdr, offsets, indices, R, sigma,
-           kcode, Lz, gravity, eps2, delta_coef, art_coef, acc, drho):
+           kcode, Lz, gravity, eps2, delta_coef, art_coef, hoop, acc, drho):
     """Accelerations and density rates of the real FLUID rows (module docstring); other
-    rows are zeroed.  Arrays run over the augmented set (real + mirrors, fields filled)."""
+    rows are zeroed.  ``hoop``: 1.0, or 0.0 to drop the hoop terms (planar mode).  Arrays
+    run over the augmented set (real + mirrors, fields filled)."""
     R2 = R * R
     fac = sigma / R
     for i in prange(x.shape[0]):
@@ -235,33 +238,49 @@ def forces(x, v, vg, rho, p, A, mt, mu, kind, grad_rho, dvdr, offsets, indices, 
                                                                + grad_rho[j, 1]) * r1
                 diff += ((rj - ri) - 0.5 * gs) * VF
         nu = mui / ri
-        acc[i, 0] = a0 + nu * dvdr[i, 0] + gravity[0]
-        acc[i, 1] = a1 + nu * dvdr[i, 1] / rr + gravity[1]
-        drho[i] = ri * cont - ri * v[i, 0] / rr + delta_coef * 2.0 * diff
+        acc[i, 0] = a0 + hoop * nu * dvdr[i, 0] + gravity[0]
+        acc[i, 1] = a1 + hoop * nu * dvdr[i, 1] / rr + gravity[1]
+        drho[i] = ri * cont - hoop * ri * v[i, 0] / rr + delta_coef * 2.0 * diff
 
 
-@njit(cache=True, parallel=True)
-def _fill_mirrors(n, src, x, v, vg, rho, p, A, mt, mu, grad_rho, dvdr):
-    """Copy the sources' fields onto the mirrors n + q (v_r, grad_r rho and the r-derivatives
-    in ``dvdr`` negated)."""
-    for q in prange(src.shape[0]):
+@njit(cache=True)
+def _fill_mirrors(n, src, mtype, zw, gz, x, v, vg, rho, p, A, mt, mu, grad_rho, dvdr):
+    """Copy the sources' fields onto the mirrors n + q, in order (a source may be an earlier
+    mirror).  ``mtype`` 0: image across the axis (r, v_r, vg_r, grad_r rho and the
+    r-derivatives in ``dvdr`` negated); 1: image across the wall plane z = ``zw`` (z,
+    v_z, grad_z rho and d_r v_z negated; the viscous velocity vg = -v: no slip; p
+    hydrostatically corrected with the body force ``gz``)."""
+    for q in range(src.shape[0]):
         s = src[q]
         g = n + q
-        x[g, 0] = -x[s, 0]
-        x[g, 1] = x[s, 1]
-        v[g, 0] = -v[s, 0]
-        v[g, 1] = v[s, 1]
-        vg[g, 0] = -vg[s, 0]
-        vg[g, 1] = vg[s, 1]
         rho[g] = rho[s]
-        p[g] = p[s]
         A[g] = A[s]
         mt[g] = mt[s]
         mu[g] = mu[s]
-        grad_rho[g, 0] = -grad_rho[s, 0]
-        grad_rho[g, 1] = grad_rho[s, 1]
-        dvdr[g, 0] = -dvdr[s, 0]
-        dvdr[g, 1] = -dvdr[s, 1]
+        if mtype[q] == 0:
+            x[g, 0] = -x[s, 0]
+            x[g, 1] = x[s, 1]
+            v[g, 0] = -v[s, 0]
+            v[g, 1] = v[s, 1]
+            vg[g, 0] = -vg[s, 0]
+            vg[g, 1] = vg[s, 1]
+            p[g] = p[s]
+            grad_rho[g, 0] = -grad_rho[s, 0]
+            grad_rho[g, 1] = grad_rho[s, 1]
+            dvdr[g, 0] = -dvdr[s, 0]
+            dvdr[g, 1] = -dvdr[s, 1]
+        else:
+            x[g, 0] = x[s, 0]
+            x[g, 1] = 2.0 * zw - x[s, 1]
+            v[g, 0] = v[s, 0]
+            v[g, 1] = -v[s, 1]
+            vg[g, 0] = -vg[s, 0]
+            vg[g, 1] = -vg[s, 1]
+            p[g] = p[s] + rho[s] * gz * (x[g, 1] - x[s, 1])
+            grad_rho[g, 0] = grad_rho[s, 0]
+            grad_rho[g, 1] = -grad_rho[s, 1]
+            dvdr[g, 0] = dvdr[s, 0]
+            dvdr[g, 1] = -dvdr[s, 1]
 
 
 class AxisymmetricFluid:
@@ -273,10 +292,20 @@ class AxisymmetricFluid:
     ``R``, ``params`` (:class:`~sphfem.fluid.wcsph.FluidParams`: rho0, c0, gamma, mu, delta,
     alpha, gravity (g_r, g_z), cfl, visc_cfl, force_cfl, eps_visc, cond_max are used);
     ``periodic_z = (z0, Lz)``: z periodic on [z0, z0 + Lz) (None: open).
+
+    ``wall_z``: a no-slip wall plane z = wall_z below the fluid, modelled by mirror images of
+    the fluid (normal velocity negated for the continuity and pressure terms, both components
+    for the viscous term; Marrone et al. 2011, sec. 3.2, for delta-SPH) instead of wall
+    particles (None: no wall plane).
+
+    ``planar=True``: plain 2D SPH in the (x, y) = (r, z) plane with a symmetry plane at
+    x = 0 (the same mirrors), ``M`` then the planar masses [kg/m]: no hoop terms, A = M / rho
+    (for cross-checks against :class:`~sphfem.fluid.wcsph.FluidSolver` in 2D).
     """
 
     def __init__(self, x, v, rho, kind, M, vol, R, params: FluidParams,
-                 kernel: str = "wendland_c2", periodic_z=None):
+                 kernel: str = "wendland_c2", periodic_z=None, planar: bool = False,
+                 wall_z: float | None = None):
         self.x = np.array(x, dtype=np.float64)
         n = self.n = self.x.shape[0]
         self.v = np.array(v, dtype=np.float64).reshape(n, 2)
@@ -302,6 +331,8 @@ class AxisymmetricFluid:
         self.drho = np.zeros(n)
         self.p = np.zeros(n)
         self.fluid = self.kind == FLUID
+        self.planar = bool(planar)
+        self.wall_z = None if wall_z is None else float(wall_z)
         self.z0, self.Lz = (0.0, 0.0) if periodic_z is None else map(float, periodic_z)
         if self.Lz and not self.R < 0.5 * self.Lz:
             raise ValueError("the z period must exceed twice the support radius")
@@ -311,18 +342,44 @@ class AxisymmetricFluid:
         self.evaluate()
 
     # -- one force evaluation ------------------------------------------------------------
+    def _mirrors(self):
+        """Sources, types and kinds of the mirrors: images of the fluid across the wall plane
+        (if any), then images across the axis of every particle and wall-plane image with
+        r < R (the corner images are axis images of wall-plane images)."""
+        n, R = self.n, self.R
+        srcs, types = [], []
+        if self.wall_z is not None:
+            s1 = np.flatnonzero(self.fluid & (self.x[:, 1] - self.wall_z < R))
+            srcs.append(s1)
+            types.append(np.ones(s1.shape[0], np.int8))
+            r_aug = np.concatenate([self.x[:, 0], self.x[s1, 0]])
+        else:
+            r_aug = self.x[:, 0]
+        s0 = np.flatnonzero(r_aug < R)
+        srcs.append(s0)
+        types.append(np.zeros(s0.shape[0], np.int8))
+        src = np.concatenate(srcs).astype(np.int64)
+        mtype = np.concatenate(types)
+        base = np.concatenate([self.kind, np.full(src.shape[0], FLUID, np.int8)])
+        kind = self.kind.copy()
+        mk = np.empty(src.shape[0], np.int8)
+        for q in range(src.shape[0]):  # the kind of a mirror is its source's
+            kq = base[src[q]] if src[q] < n else mk[src[q] - n]
+            mk[q] = MIRROR_FLUID if kq in (FLUID, MIRROR_FLUID) else MIRROR_WALL
+        return src, mtype, np.concatenate([kind, mk])
+
     def evaluate(self) -> None:
         """Pressures, wall states, mirrors, gradients, accelerations and density rates."""
         t0 = time.perf_counter()
         pa, n, R = self.params, self.n, self.R
-        src = np.flatnonzero(self.x[:, 0] < R)
+        src, mtype, kind = self._mirrors()
         m = n + src.shape[0]
-        kind = np.concatenate([self.kind, np.where(self.kind[src] == FLUID, MIRROR_FLUID,
-                                                   MIRROR_WALL).astype(np.int8)])
         x = np.empty((m, 2))
         x[:n] = self.x
-        x[n:, 0] = -self.x[src, 0]
-        x[n:, 1] = self.x[src, 1]
+        zw = 0.0 if self.wall_z is None else self.wall_z
+        _fill_mirrors(n, src, mtype, zw, self.gravity[1], x, x.copy(), x.copy(),
+                      np.zeros(m), np.zeros(m), np.zeros(m), np.zeros(m), np.zeros(m),
+                      np.zeros((m, 2)), np.zeros((m, 2)))
         lo = x.min(axis=0) - R
         hi = x.max(axis=0) + R
         period = np.zeros(2)
@@ -345,27 +402,31 @@ class AxisymmetricFluid:
         mu[:n] = self.mu
         gr = np.zeros((m, 2))
         dvdr = np.zeros((m, 2))
+        shep = np.zeros(m)
+        circ = 1.0 if self.planar else 2.0 * math.pi * np.maximum(self.x[:, 0], 1e-300)
+        A[:n] = np.where(fl, self.M / (circ * self.rho), self.vol)
         # mirrors of the fluid first (walls read them), then the walls' state
-        _fill_mirrors(n, src, x, v, vg, rho, p, A, mt, mu, gr, dvdr)
-        wall_state(x, v, rho, p, kind, nl.offsets, nl.indices, R, self.kcode, self.Lz,
+        _fill_mirrors(n, src, mtype, zw, self.gravity[1], x, v, vg, rho, p, A, mt, mu, gr, dvdr)
+        wall_state(x, v, rho, p, A, kind, nl.offsets, nl.indices, R, self.kcode, self.Lz,
                    self.gravity, pa.rho0, self.B, pa.gamma, vg)
-        A[:n] = np.where(fl, self.M / (2.0 * math.pi * np.maximum(self.x[:, 0], 1e-300)
-                                       * self.rho), self.vol)
-        A[:n][~fl] = self.vol[~fl]
         mt[:n] = rho[:n] * A[:n]
-        _fill_mirrors(n, src, x, v, vg, rho, p, A, mt, mu, gr, dvdr)
+        _fill_mirrors(n, src, mtype, zw, self.gravity[1], x, v, vg, rho, p, A, mt, mu, gr, dvdr)
         gradients(x, rho, vg, A, kind, nl.offsets, nl.indices, R, self.sigma, self.kcode,
-                  self.Lz, pa.cond_max, gr, dvdr)
-        _fill_mirrors(n, src, x, v, vg, rho, p, A, mt, mu, gr, dvdr)
+                  self.Lz, pa.cond_max, gr, dvdr, shep)
+        _fill_mirrors(n, src, mtype, zw, self.gravity[1], x, v, vg, rho, p, A, mt, mu, gr, dvdr)
         acc = np.zeros((m, 2))
         drho = np.zeros(m)
         forces(x, v, vg, rho, p, A, mt, mu, kind, gr, dvdr, nl.offsets, nl.indices, R,
                self.sigma, self.kcode, self.Lz, self.gravity, pa.eps_visc * self.h**2,
-               pa.delta * self.h * pa.c0, pa.alpha * self.h * pa.c0, acc, drho)
+               pa.delta * self.h * pa.c0, pa.alpha * self.h * pa.c0,
+               0.0 if self.planar else 1.0, acc, drho)
         self.acc[:] = acc[:n]
         self.drho[:] = drho[:n]
         self.p[:] = p[:n]
         self.area = A[:n].copy()
+        #: sum_j A_j W_ij over all neighbours, self included (1 where the areas tile the
+        #: plane; ~1/2 at a free surface)
+        self.shepard = shep[:n].copy()
         self.wall_s["forces"] += time.perf_counter() - t1
 
     # -- time stepping -------------------------------------------------------------------
@@ -409,6 +470,10 @@ class AxisymmetricFluid:
         neg = self.fluid & (self.x[:, 0] < 0.0)
         self.x[neg, 0] *= -1.0
         self.v[neg, 0] *= -1.0
+        if self.wall_z is not None:
+            below = self.fluid & (self.x[:, 1] < self.wall_z)
+            self.x[below, 1] = 2.0 * self.wall_z - self.x[below, 1]
+            self.v[below, 1] *= -1.0
         if self.Lz:
             self.x[:, 1] = self.z0 + np.mod(self.x[:, 1] - self.z0, self.Lz)
 
