@@ -216,13 +216,13 @@ def _child(path: str) -> int:
 
     job = json.loads(Path(path).read_text())
     scene = parse_scene(job["scene"], source="<numba warm-up>")
-    log = StageLog()
-    with log:
-        try:
-            sim = Simulation(scene)
-            sim.run(job["out"], progress=False)
-        except SimulationStopped:  # the kernels of the steps taken are cached all the same
-            pass
+    sim = None
+    try:
+        sim = Simulation(scene)
+        sim.run(job["out"], progress=False)
+    except SimulationStopped:  # the kernels of the steps taken are cached all the same
+        pass
+    log = sim.stage_log if sim is not None else StageLog()
     kernels = used_kernels()
     manifest = Path(job["manifest"])
     manifest.parent.mkdir(parents=True, exist_ok=True)
