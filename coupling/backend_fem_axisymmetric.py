@@ -6,12 +6,13 @@ lives in the (r, z) half-plane: sensor points, forces and temperature points are
 arrays of (r, z).
 
 Forces.  ``force_convention="ring"`` (default): each sensor force is the total force of
-its ring [N] (an axisymmetric SPH particle stands for a ring of radius r); ``"radian"``:
-the force per radian [N/rad].  The transfer is the conservative f = P^T F of
-:class:`coupling.transfer.ForceTransfer`, divided by 2 pi for ring totals since the
-substrate's equations are per radian.  The bookkeeping (``force_in`` / ``force_out``) is
-in the units of the given forces, before that division, so the driver's residual checks
-are unchanged.
+its ring [N] (an axisymmetric SPH particle stands for a ring of radius r, ring mass times
+acceleration); ``"radian"``: the force per radian [N/rad]; ``"line"``: the line density
+f [N/m] along the ring (planar mass times acceleration), ring total 2 pi r f.  The forces
+are turned into ring totals, handed over by the conservative f = P^T F of
+:class:`coupling.transfer.ForceTransfer` and divided by 2 pi (the substrate's equations are
+per radian).  The bookkeeping (``force_in`` / ``force_out``, moments) is in ring totals
+[N], so its z component is the net axial force on the substrate.
 
 Temperatures go through :class:`coupling.transfer.TemperatureMap` in the half-plane;
 ``vol`` must then be the particles' (r, z) cell areas [m^2] (the map's cells tile the
@@ -58,9 +59,13 @@ class AxisymmetricFEMBackend(FEMBackend):
         self._cell_volume = substrate.cell_volume  # ring volumes, not (r, z) areas
 
     def apply(self, points, forces, T_points=None, T=None, vol=None) -> dict:
-        book = super().apply(points, forces, T_points, T, vol)
-        if self.force_convention == "ring":
-            self._f = self._f / (2.0 * np.pi)  # ring totals -> per radian
+        from sphfem.fem.axisymmetric import per_radian
+
+        pts = np.atleast_2d(np.asarray(points, float)).reshape(-1, 2)
+        ring = 2.0 * np.pi * per_radian(pts, np.reshape(forces, (-1, 2)),
+                                        self.force_convention)
+        book = super().apply(pts, ring, T_points, T, vol)
+        self._f = self._f / (2.0 * np.pi)  # ring totals -> per radian
         return book
 
     def diagnostics(self) -> dict:

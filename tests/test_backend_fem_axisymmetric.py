@@ -66,6 +66,13 @@ def test_ring_forces_equal_the_pressure_patch():
     back2.apply(X, F / (2 * np.pi))
     assert np.allclose(back2.solve(0.0).result.dofs, res.result.dofs, rtol=0,
                        atol=1e-12 * np.abs(res.result.dofs).max())
+    # line densities f = F / (2 pi r): the same loads, bookkeeping in ring totals
+    back3 = make_backend("fem-axisymmetric", substrate=sub, temperature_map="off",
+                         force_convention="line")
+    book3 = back3.apply(X, F / (2 * np.pi * r[:, None]))
+    assert np.allclose(book3["force_in"], F.sum(axis=0), rtol=1e-12)
+    assert np.allclose(back3.solve(0.0).result.dofs, res.result.dofs, rtol=0,
+                       atol=1e-12 * np.abs(res.result.dofs).max())
     d = back.diagnostics()
     assert d["backend"] == "fem-axisymmetric" and d["force_convention"] == "ring"
     assert sub.n_factorizations == 1

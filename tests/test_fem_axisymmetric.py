@@ -251,9 +251,15 @@ def test_ring_forces_conventions_and_factorised_once():
                                   force_convention="radian")
     res2 = s2.solve(point_forces=(X, F / (2 * np.pi)))
     assert np.allclose(res2.dofs, res.dofs, rtol=0, atol=1e-12 * np.abs(res.dofs).max())
+    # line densities f = F / (2 pi r) (rings off the axis)
+    s3 = AxisymmetricFEMSubstrate(disc(), E, NU, ALPHA, clamps=["bottom"],
+                                  force_convention="line")
+    a = s.solve(point_forces=(X[1:], F[1:])).dofs
+    b = s3.solve(point_forces=(X[1:], F[1:] / (2 * np.pi * X[1:, :1]))).dofs
+    assert np.allclose(b, a, rtol=0, atol=1e-12 * np.abs(a).max())
     for _ in range(3):
         s.solve(dT_nodal=10.0, point_forces=(X, F))
-    assert s.n_factorizations == 1 and s.n_solves == 4
+    assert s.n_factorizations == 1 and s.n_solves == 5
 
 
 def test_bad_input():
@@ -267,7 +273,7 @@ def test_bad_input():
     with pytest.raises(ValueError, match="roller components"):
         AxisymmetricFEMSubstrate(mesh, E, NU, ALPHA, rollers={"bottom": "x"})
     with pytest.raises(ValueError, match="force_convention"):
-        AxisymmetricFEMSubstrate(mesh, E, NU, ALPHA, force_convention="line")
+        AxisymmetricFEMSubstrate(mesh, E, NU, ALPHA, force_convention="per-ring")
     with pytest.raises(ValueError, match="no boundary group"):
         AxisymmetricFEMSubstrate(mesh, E, NU, ALPHA, clamps=["floor"])
 

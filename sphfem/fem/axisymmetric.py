@@ -19,11 +19,13 @@ so the stiffness ``K``, the load vector and the reactions at nodes are per radia
 
 Point-force convention.  A point ``X_p = (r_p, z_p)`` of the half-plane is a ring of radius
 r_p.  ``point_forces`` take, by default (``force_convention="ring"``), the **total force of
-the ring** [N]: a ring load of f [N/m] along the circumference is the ring force
+the ring** F [N]: a ring load of f [N/m] along the circumference is the ring force
 F = 2 pi r_p f, and its axial component is the true net force on the body.  With
-``force_convention="radian"`` the forces are per radian [N/rad] = F / (2 pi).  Tractions
-[Pa] and body forces [N/m^3] are the 3D fields, without convention.  ``reaction`` returns
-ring totals (2 pi times the per-radian sums).
+``force_convention="radian"`` the forces are per radian [N/rad] = F / (2 pi); with
+``"line"`` they are the line density f [N/m] (an axisymmetric SPH particle's planar mass
+times its acceleration), per radian r_p f.  Tractions [Pa] and body forces [N/m^3] are the
+3D fields, without convention.  ``reaction`` returns ring totals (2 pi times the per-radian
+sums).
 
 Stress tensors are 3 x 3 in the order **(r, z, theta)**: ``S[0, 0] = sigma_rr``,
 ``S[1, 1] = sigma_zz``, ``S[2, 2] = sigma_tt`` (hoop), ``S[0, 1] = S[1, 0] = sigma_rz``,
@@ -61,11 +63,26 @@ logger = logging.getLogger(__name__)
 __all__ = ["AxisymmetricFEMSubstrate", "AxisymmetricResult", "axisymmetric_elasticity",
            "axisymmetric_thermal_load", "axisymmetric_traction_load",
            "axisymmetric_body_force_load", "axisymmetric_stress", "graded_tensor_rz",
-           "substrate_rz", "FORCE_CONVENTIONS"]
+           "substrate_rz", "per_radian", "FORCE_CONVENTIONS"]
 
 TWO_PI = 2.0 * np.pi
 _COMPONENTS_RZ = {"r": 0, "z": 1}
-FORCE_CONVENTIONS = ("ring", "radian")
+FORCE_CONVENTIONS = ("ring", "radian", "line")
+
+
+def per_radian(points, forces, convention: str) -> np.ndarray:
+    """Point forces (n, 2) at (r, z) points (n, 2) given per ``convention`` as forces per
+    radian: ring totals F / (2 pi), per radian as given, line densities r f."""
+    F = np.atleast_2d(np.asarray(forces, float))
+    if convention == "ring":
+        return F / TWO_PI
+    if convention == "radian":
+        return F
+    if convention == "line":
+        r = np.atleast_2d(np.asarray(points, float))[:, 0]
+        return F * np.maximum(r, 0.0)[:, None]
+    raise ValueError(f"force_convention must be one of {FORCE_CONVENTIONS}, got "
+                     f"{convention!r}")
 
 
 # ----------------------------------------------------------------------------- forms
@@ -283,7 +300,7 @@ class AxisymmetricFEMSubstrate(FEMSubstrate):
         >= 0 and x[1] = z, e.g. :func:`substrate_rz`.
     rollers : ``{group: "r" | "z" | "rz"}``.
     force_convention : "ring" (point forces are ring totals [N], = 2 pi r f for a line load
-        f [N/m]) or "radian" (forces per radian [N/rad]).
+        f [N/m]), "radian" (forces per radian [N/rad]) or "line" (line densities f [N/m]).
     intorder : quadrature order of the cells (default 2p + 1 for P_p: the r-weighted
         gradient terms exactly, the rational hoop term u_r v_r / r to high order).
     solver : "direct" only (a 2D problem; sparse Cholesky / LU, factorised once).
@@ -422,11 +439,11 @@ class AxisymmetricFEMSubstrate(FEMSubstrate):
         return axisymmetric_body_force_load(force).assemble(self.basis)
 
     def point_force_load(self, points, forces, snap: str | None = "top") -> np.ndarray:
-        """Per-radian nodal loads of ring forces (n, 2) at points (n, 2) = (r, z):
-        f = P^T F / (2 pi) for ring totals (``force_convention="ring"``), P^T F for
-        forces per radian.  sum_nodes f_c = sum_points F_c / (2 pi) exactly."""
-        f = super().point_force_load(points, forces, snap=snap)
-        return f / TWO_PI if self.force_convention == "ring" else f
+        """Per-radian nodal loads f = P^T F_rad of point forces (n, 2) at points (n, 2) =
+        (r, z), F_rad the forces per radian (:func:`per_radian` of ``force_convention``):
+        sum_nodes f_c = sum_points F_rad,c exactly."""
+        return super().point_force_load(
+            points, per_radian(points, forces, self.force_convention), snap=snap)
 
     def solve(self, dT_nodal=None, tractions=None, point_forces=None, body_force=None,
               T_nodal=None, snap: str | None = "top", load=None) -> AxisymmetricResult:
