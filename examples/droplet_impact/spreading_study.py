@@ -160,6 +160,7 @@ def run_case(name: str) -> dict:
         setup_s = time.perf_counter() - t0
         ps = sim.particles
         times, diam = [], {"edge": [], "sheet": [], "area": []}
+        layer = {"rho_mean": [], "rho_min": [], "p_neg": [], "n_layer": [], "n_fluid": []}
         removed = 0
         r_off = WALL_HALF - scene.support_radius
         next_m = t_contact
@@ -184,6 +185,15 @@ def run_case(name: str) -> dict:
                     diam["edge"].append(contact_diameter(x, 0.0, dx, ps.kind) / D)
                     diam["sheet"].append(contact_diameter(x, 0.0, dx, ps.kind, link=2.0) / D)
                     diam["area"].append(area_diameter(x, 0.0, dx, ps.kind) / D)
+                    # the state of the wall layer: density ratio and tension (p < 0)
+                    fl = ps.kind == FLUID
+                    lay = fl & (x[:, 2] >= -0.5 * dx) & (x[:, 2] < dx)
+                    rr = ps.rho[lay] / RHO
+                    layer["rho_mean"].append(float(rr.mean()) if rr.size else None)
+                    layer["rho_min"].append(float(rr.min()) if rr.size else None)
+                    layer["p_neg"].append(float((ps.p[lay] < 0).mean()) if rr.size else None)
+                    layer["n_layer"].append(int(lay.sum()))
+                    layer["n_fluid"].append(int(fl.sum()))
                     next_m += EVERY_TC * tc
         except SimulationStopped as e:
             status, message = "stopped", str(e)
@@ -199,7 +209,8 @@ def run_case(name: str) -> dict:
         "n": int(ps.n), "removed": removed,
         "status": status, "message": message, "steps": sim.step_count,
         "setup_s": setup_s, "wall_s": wall_s,
-        "We": We, "Re": Re, "nu_art": nu_art, "Re_eff": Re_eff, "t_over_tc": times}
+        "We": We, "Re": Re, "nu_art": nu_art, "Re_eff": Re_eff, "t_over_tc": times,
+        "layer": layer}
     for key, series in diam.items():
         a = np.asarray(series)
         k = int(np.argmax(a)) if a.size else -1
@@ -259,44 +270,67 @@ def table(rows: list[dict]) -> str:
 
 
 def plot(rows: list[dict], path: Path) -> None:
-    """D_max / D of each case at its Re_eff (filled) and at the physical Re (open), with
-    the correlations at We of 50 and 10 m/s against Re."""
+    """D_max / D of each case (sheet: filled, wetted area: open) at its Re_eff with the
+    correlations at the physical We (panels 50 and 10 m/s; Re_eff and physical Re marked),
+    and against D / dx with the monolayer-disc bound sqrt(2 (D/dx) / 3)."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
-    from sphfem.fluid.spreading import CORRELATIONS
+    from sphfem.fluid.spreading import CORRELATIONS, disc_spread_ratio
 
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.5), sharey=True)
-    Re = np.logspace(2, 4.6, 200)
-    for ax, v in zip(axes, (50.0, 10.0), strict=True):
+    colours = {0.02: "k", 0.01: "tab:gray", 0.005: "tab:brown", 0.0: "tab:red"}
+    fig, axes = plt.subplots(1, 3, figsize=(15, 4.8))
+    Re = np.logspace(1.5, 4.6, 200)
+    for ax, v in zip(axes[:2], (50.0, 10.0), strict=True):
         We = RHO * v * v * D / SIGMA
         for name, cor in CORRELATIONS.items():
-            ax.plot(Re, cor(We, Re), label=_SHORT[name] + f" ({cor.citation.split(',')[0]} "
-                    f"{cor.citation.split('(')[1][:4]})")
+            ax.plot(Re, cor(We, Re), lw=1.2, label=f"{_SHORT[name]}: {cor.citation}"[:60])
         sel = [r for r in rows if r["params"]["v"] == v]
         for r in sel:
             p = r["params"]
             mk = "o" if p["wall"] == "noslip" else "s"
-            col = {0.02: "k", 0.01: "tab:gray", 0.005: "tab:brown", 0.0: "tab:red"}.get(
-                p["alpha"], "tab:purple")
-            ax.plot(r["Re_eff"], r["beta_max"], mk, color=col, ms=6)
-            ax.annotate(r["case"], (r["Re_eff"], r["beta_max"]), fontsize=7,
+            col = colours.get(p["alpha"], "tab:purple")
+            ax.plot(r["Re_eff"], r["beta_sheet"], mk, color=col, ms=6)
+            ax.plot(r["Re_eff"], r["beta_area"], mk, mfc="none", color=col, ms=6)
+            ax.annotate(f"{r['case']}", (r["Re_eff"], r["beta_sheet"]), fontsize=7,
                         xytext=(3, 3), textcoords="offset points")
-        if sel:
-            ax.axvline(sel[0]["Re"], color="0.6", ls=":", lw=1)
-            ax.text(sel[0]["Re"], 1.2, " physical Re",
-                    rotation=90, fontsize=7, color="0.4")
+        Re_phys = RHO * v * D / MU
+        ax.axvline(Re_phys, color="0.5", ls=":", lw=1)
+        ax.text(Re_phys, 1.15, " physical Re", rotation=90, fontsize=7, color="0.4")
         ax.set_xscale("log")
-        ax.set_xlabel("Re (SPH runs: Re_eff = vD / (nu + alpha h c0 / 10))")
-        ax.set_title(f"v = {v:g} m/s, We = {We:.0f} (theta = 90 deg)")
+        ax.set_xlabel("Re  (SPH cases at Re_eff = vD / (nu + alpha h c0 / 10))")
+        ax.set_title(f"v = {v:g} m/s, We = {We:.0f} (theta = 90 deg in PF96, UK05)",
+                     fontsize=9)
+        ax.set_ylim(1.0, 8.0)
         ax.grid(alpha=0.3, which="both")
     axes[0].set_ylabel("D_max / D")
-    axes[0].set_ylim(1.0, 8.0)
-    axes[1].legend(fontsize=7, loc="upper left")
-    fig.text(0.01, 0.01, "circles: no-slip wall, squares: free slip; black alpha=0.02, grey "
-             "0.01, brown 0.005, red 0 (physical viscosity only)", fontsize=7)
+    axes[0].legend(fontsize=6, loc="upper left")
+    ax = axes[2]
+    n = np.linspace(6, 40, 100)
+    ax.plot(n, disc_spread_ratio(1.0 / n), "k--", lw=1,
+            label="monolayer disc: sqrt(2 (D/dx) / 3)")
+    We50, Re50 = RHO * 2500.0 * D / SIGMA, RHO * 50.0 * D / MU
+    vals = [float(c(We50, Re50)) for c in CORRELATIONS.values()]
+    ax.axhspan(min(vals), max(vals), color="tab:blue", alpha=0.15,
+               label="correlations at 50 m/s (physical Re)")
+    for r in rows:
+        p = r["params"]
+        if p["v"] != 50.0 or p["st"] != "csf":
+            continue
+        mk = "o" if p["wall"] == "noslip" else "s"
+        col = colours.get(p["alpha"], "tab:purple")
+        ax.plot(p["n"], r["beta_sheet"], mk, color=col, ms=6)
+        ax.plot(p["n"], r["beta_area"], mk, mfc="none", color=col, ms=6)
+    ax.set_xlabel("D / dx (particles across the droplet)")
+    ax.set_title("50 m/s: against resolution", fontsize=9)
+    ax.set_ylim(1.0, 8.0)
+    ax.grid(alpha=0.3)
+    ax.legend(fontsize=7, loc="upper left")
+    fig.text(0.01, 0.01, "filled: contact line of the connected sheet; open: wetted-area "
+             "diameter; circles no-slip, squares free slip; black alpha = 0.02, grey 0.01, "
+             "brown 0.005, red 0 (physical viscosity and delta-SPH only)", fontsize=7)
     fig.tight_layout(rect=(0, 0.03, 1, 1))
     fig.savefig(path, dpi=130)
     plt.close(fig)
