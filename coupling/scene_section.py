@@ -19,6 +19,7 @@ Example (the substrate under a droplet, FEM on a graded hexahedral mesh)::
 
 from __future__ import annotations
 
+from coupling.substrate_heat import HEAT_SECTION, check_heat
 from sphfem.schema import CUSTOM, REQUIRED, STRINGS, TEMPERATURE, VECTOR, FrozenDict, Param, Section
 
 AXES = "xyz"
@@ -94,6 +95,7 @@ def _check(rec, ctx, path):
                                             f"{mesh.cells!r}")
     if ctx.dim == 1:
         ctx.error(path, "the coupled substrate needs a 2D (plane strain) or 3D scene")
+    check_heat(rec["heat"], ctx, f"{path}.heat", rec.material, rec.backend)
 
 
 MESH = Section("mesh", (
@@ -156,7 +158,7 @@ COUPLING = Section("coupling", (
     Param("output", str, "substrate", doc="subfolder of the run's output folder"),
     Param("vtu_every", int, 10, ge=0,
           doc="write the substrate VTU every this many solves (0: the last only)"),
-), subsections=(MESH,), check=_check, doc=(
+), subsections=(MESH, HEAT_SECTION), check=_check, doc=(
     "One-way staggered coupling (Park 2019 sec. 2.4.4): every `every_k_steps` SPH steps the "
     "sensor particles (the SPH solid region's surface layers) hand the force the fluid exerts "
     "on them (f = P^T F, total force and moment conserved) and the region's temperatures "
