@@ -105,6 +105,8 @@ class CouplingDriver:
         self.timings = {"sensors": 0.0, "backend": 0.0, "records": 0.0}
         self.last = None
         self.n_written = 0
+        #: [coupling.heat] fem-contact (coupling.substrate_heat.SubstrateHeat) or None
+        self.thermal = None
 
     def maybe_couple(self, ps, t: float, step: int, last: bool = False, folder=None):
         """Couple when ``step`` is a multiple of ``every_k`` or ``last``; return the record."""
@@ -116,6 +118,9 @@ class CouplingDriver:
     def couple(self, ps, t: float, step: int = 0, folder=None, last: bool = False) -> dict:
         t0 = time.perf_counter()
         r = self.sensors.read(ps, t)
+        if self.thermal is not None:  # contact exchange; the FEM heat field's temperatures
+            self.thermal.exchange(ps, t)
+            r = self.thermal.reading(r, self.backend.temperature_targets)
         t1 = time.perf_counter()
         book = self.backend.apply(r.x, r.force, r.x_region, r.T_region, r.vol_region)
         res = self.backend.solve(t)
@@ -392,13 +397,18 @@ class CouplingModule(PhysicsModule):
             backend.sub.probe_matrix(np.asarray(probes, float))  # raises if outside the mesh
         self.driver = CouplingDriver(sensors, backend, probes, cfg.every_k_steps,
                                      cfg.vtu_every)
+        from coupling.substrate_heat import build_substrate_heat
+
+        self.driver.thermal = build_substrate_heat(sc, cfg, ctx, reg)
+        if self.driver.thermal is not None and backend.temperature_map != "off":
+            backend.temperature_map = "nearest"  # the heat field at the nodes, copied
         region = sensors.region_mask(ps)
         if not region.any():
             raise ValueError(f"coupling: no particle of material {cfg.material!r} in blocks "
                              f"{names}")
         self.region_count = int(region.sum())
         self.sensor_count = int(sensors.sensor_mask(ps).sum())
-        if "c_heat" in ps and np.all(ps.c_heat[region] > 0):
+        if "c_heat" in ps and np.all(ps.c_heat[region] > 0) and self.driver.thermal is None:
             self.ledger = HeatLedger(ps, region)
         self._U, self._kappa = self._scales(ctx, ps)
         self._t_init = float(ctx.t)
@@ -468,6 +478,8 @@ class CouplingModule(PhysicsModule):
         if self.ledger is not None:
             region = self.driver.sensors.region_mask(ctx.particles)
             d["heat"] = self.ledger.figures(ctx.particles, region)
+        if self.driver.thermal is not None:
+            d["substrate_heat"] = self.driver.thermal.diagnostics(ctx.particles)
         return d
 
 
