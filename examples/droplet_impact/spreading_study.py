@@ -27,8 +27,8 @@ spacing of the wall) is recorded three ways: ``edge`` (the outermost such partic
 without the particles and fingers that broke off it; the figure used below) and ``area``
 (the disc of the wetted area, N dx^2); D_max is the largest value over time.  Fluid
 particles beyond the wall's edge (3.5 D from the axis, less a support radius), 4 D above
-the wall or below its top (ejecta sliding off the edge) are taken out of the run (kind
-GHOST, at rest, counted), so they cannot stop it by leaving the domain.  One JSON per case
+the wall or below its bottom (ejecta sliding off the edge, leaks) are taken out of the run
+(kind GHOST, at rest, counted), so they cannot stop it by leaving the domain.  One JSON per case
 (``DIR/<case>.json``; an existing one is kept, so an interrupted study resumes).
 ``--report`` writes ``results.json``, ``table.md`` and ``spreading.png`` (D_max / D against
 Re with the correlations at the physical We) into the given folder.
@@ -160,9 +160,11 @@ def run_case(name: str) -> dict:
         setup_s = time.perf_counter() - t0
         ps = sim.particles
         times, diam = [], {"edge": [], "sheet": [], "area": []}
-        layer = {"rho_mean": [], "rho_min": [], "p_neg": [], "n_layer": [], "n_fluid": []}
+        layer = {"rho_mean": [], "rho_min": [], "p_neg": [], "n_layer": [], "n_fluid": [],
+                 "n_below": []}
         removed = 0
         r_off = WALL_HALF - scene.support_radius
+        z_off = -3.0 * dx  # the wall's bottom
         next_m = t_contact
         status, message = "completed", ""
         t_end = scene.time.t_end
@@ -175,7 +177,7 @@ def run_case(name: str) -> dict:
                 sim.check_state()
                 x = ps.x
                 out = (ps.kind == FLUID) & ((x[:, 0] ** 2 + x[:, 1] ** 2 > r_off ** 2)
-                                            | (x[:, 2] > 4 * D) | (x[:, 2] < 0.0))
+                                            | (x[:, 2] > 4 * D) | (x[:, 2] < z_off))
                 if out.any():
                     ps.kind[out] = GHOST
                     ps.v[out] = 0.0
@@ -194,6 +196,7 @@ def run_case(name: str) -> dict:
                     layer["p_neg"].append(float((ps.p[lay] < 0).mean()) if rr.size else None)
                     layer["n_layer"].append(int(lay.sum()))
                     layer["n_fluid"].append(int(fl.sum()))
+                    layer["n_below"].append(int((fl & (x[:, 2] < 0.0)).sum()))
                     next_m += EVERY_TC * tc
         except SimulationStopped as e:
             status, message = "stopped", str(e)
