@@ -28,7 +28,7 @@ alternative.  In displacement form the step solves
 
 with homogeneous Dirichlet dofs (the substrate's clamps, rollers, axis and pins).  The
 effective matrix is factorised once per step size and refactorised only when ``dt``
-changes (a few distinct sizes are cached).  Loads are assembled exactly as the
+changes by more than ``DT_RTOL`` (a few distinct sizes are cached).  Loads are assembled exactly as the
 quasi-static substrate does (thermal strain, tractions, point forces, body force, a ready
 vector), so results are the substrate's own result type (stresses, von Mises, probes).
 
@@ -61,6 +61,8 @@ __all__ = ["ElastodynamicSubstrate", "mass_form", "wave_speeds", "rayleigh_speed
 
 #: distinct step sizes whose factorisations are kept (the SPH step varies a little)
 _CACHE = 4
+#: step sizes within this relative difference share a factorisation (and its dt)
+DT_RTOL = 1e-9
 
 
 def mass_form(rho: float, axisymmetric: bool) -> BilinearForm:
@@ -169,19 +171,23 @@ class ElastodynamicSubstrate:
         return f, dT
 
     def _solver(self, dt: float):
-        key = float(dt)
-        if key not in self._lu:
-            t0 = time.perf_counter()
-            A = (1.0 + self.hht_alpha) * self._K_II + self._M_II / (self.beta * dt * dt)
-            lu = splu(A.tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                      options={"SymmetricMode": True})
-            if len(self._lu) >= _CACHE:
-                self._lu.pop(next(iter(self._lu)))
-            self._lu[key] = lu
-            self.n_factorizations += 1
-            self.timings["factorize"] += time.perf_counter() - t0
-            logger.debug("elastodynamic: factorised K + M/(beta dt^2) for dt = %.4g s", dt)
-        return self._lu[key]
+        """(factorisation, step size) for ``dt``: a cached size within ``DT_RTOL`` of dt is
+        reused (coupling times t_n - t_{n-1} differ by round-off from one interval to the
+        next), otherwise K_eff is factorised for dt."""
+        for key, lu in self._lu.items():
+            if abs(dt - key) <= DT_RTOL * key:
+                return lu, key
+        t0 = time.perf_counter()
+        A = (1.0 + self.hht_alpha) * self._K_II + self._M_II / (self.beta * dt * dt)
+        lu = splu(A.tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                  options={"SymmetricMode": True})
+        if len(self._lu) >= _CACHE:
+            self._lu.pop(next(iter(self._lu)))
+        self._lu[float(dt)] = lu
+        self.n_factorizations += 1
+        self.timings["factorize"] += time.perf_counter() - t0
+        logger.debug("elastodynamic: factorised K + M/(beta dt^2) for dt = %.4g s", dt)
+        return lu, float(dt)
 
     # ------------------------------------------------------------------ step
     def step(self, dt: float, **loads):
@@ -203,6 +209,8 @@ class ElastodynamicSubstrate:
         a, beta, gamma = self.hht_alpha, self.beta, self.gamma
         I = self.sub.I
         K = self.sub.K
+        lu, dt_req = self._solver(dt)
+        dt, dt_req = dt_req, dt  # the factorised size (within DT_RTOL); t advances by dt_req
         c = 1.0 / (beta * dt * dt)
         u_star = self.u + dt * self.v + dt * dt * (0.5 - beta) * self.a
         v_star = self.v + dt * (1.0 - gamma) * self.a
@@ -210,12 +218,12 @@ class ElastodynamicSubstrate:
         if a:
             rhs += a * (K @ self.u)
         u = self.sub.basis.zeros()
-        u[I] = self._solver(dt).solve(rhs[I])
+        u[I] = lu.solve(rhs[I])
         acc = c * (u - u_star)
         acc[self.sub.D] = 0.0
         self.v = v_star + gamma * dt * acc
         self.u, self.a, self.f = u, acc, np.asarray(f, float).copy()
-        self.t += dt
+        self.t += dt_req
         self.dT = dT
         self.n_steps += 1
         self.timings["solve"] += time.perf_counter() - t1
