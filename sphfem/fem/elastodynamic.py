@@ -28,9 +28,9 @@ alternative.  In displacement form the step solves
 
 with homogeneous Dirichlet dofs (the substrate's clamps, rollers, axis and pins).  The
 effective matrix is factorised once per step size and refactorised only when ``dt``
-changes by more than ``DT_RTOL`` (a few distinct sizes are cached).  Loads are assembled exactly as the
-quasi-static substrate does (thermal strain, tractions, point forces, body force, a ready
-vector), so results are the substrate's own result type (stresses, von Mises, probes).
+changes by more than ``DT_RTOL`` (a few distinct sizes are cached).  Loads are assembled
+exactly as the quasi-static substrate does (thermal strain, tractions, point forces, body
+force, a ready vector), and results are the substrate's own result type.
 
 :func:`wave_speeds` and :func:`quasi_static_check` decide when the quasi-static substrate
 is enough (see their docstrings and docs/validation/substrate_dynamics/README.md).
