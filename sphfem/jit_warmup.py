@@ -181,6 +181,7 @@ def warm_up(scene, coarsen: float = 3.0, steps: int = 100, progress: bool = Fals
     with tempfile.TemporaryDirectory(prefix="sphfem-jit-") as tmp:
         src = Path(tmp) / "scene.json"
         src.write_text(json.dumps({"scene": coarsened(scene, coarsen, steps),
+                                   "source": scene.source,  # relative mesh_file paths
                                    "manifest": str(manifest_path(scene)),
                                    "out": str(Path(tmp) / "out")}))
         was = report.enabled()
@@ -215,7 +216,7 @@ def _child(path: str) -> int:
     from sphfem.simulation import Simulation, SimulationStopped
 
     job = json.loads(Path(path).read_text())
-    scene = parse_scene(job["scene"], source="<numba warm-up>")
+    scene = parse_scene(job["scene"], source=job.get("source") or "<numba warm-up>")
     sim = None
     try:
         sim = Simulation(scene)
