@@ -15,7 +15,7 @@ planar operators are the SPH sums of :mod:`sphfem.fluid.passes` with planar mass
 the hoop terms are added per particle (the formulation of Petschek & Libersky 1993 with
 the reflective axis particles of Garcia-Senz & Relano-Pastor 2012, MNRAS 424, 1585, sec. 2):
 
-    Drho_i/Dt = rho_i sum_j A_j (v_i - v_j) . grad_i W_ij - rho_i v_r,i / r_i
+    Drho_i/Dt = -rho_i tr(B_i G_i) - rho_i v_r,i / r_i,  G_i = sum_j A_j (v_j - v_i) (x) grad_i W
                 + 2 delta h c0 sum_j A_j [(rho_j - rho_i) - (<grad rho>_i + <grad rho>_j)
                   . (x_j - x_i) / 2] F_ij                (fluid pairs; Antuono et al. 2010)
     Dv_i/Dt   = -sum_j mt_j (p_i / rho_i^2 + p_j / rho_j^2) grad_i W_ij            (pressure)
@@ -24,7 +24,13 @@ the reflective axis particles of Garcia-Senz & Relano-Pastor 2012, MNRAS 424, 15
                 + (mu_i / rho_i) [<d_r (v_r / r)>_i e_r + <d_r v_z>_i / r_i e_z]     (hoop)
                 + artificial viscosity (alpha h c0, as in passes) + g
 
-using (1/r) d_r v_r - v_r / r^2 = d_r (v_r / r): the SPH derivative of the even, smooth
+The planar divergence is renormalised (B_i below, exact for linear v on any particle
+arrangement): the hoop term v_r / r is exact pointwise, and next to it the plain sum
+sum_j A_j (v_j - v_i) . grad_i W_ij, whose moment matrix drifts from the identity as the
+flow stretches the lattice (rings moving out shrink their area A ~ 1/r), made the two
+inconsistent: a drop flattened by v = a (r, -2z) built up spurious pressures of 10-20 rho V^2
+and blew up after a stretch of ~2 (tests/test_fluid_axisymmetric.py).  The viscous hoop terms
+use (1/r) d_r v_r - v_r / r^2 = d_r (v_r / r): the SPH derivative of the even, smooth
 field v_r / r needs no division by r, while <d_r v_r> / r would carry the kernel's
 smoothing error of an odd field (3 c R^2 / r for v_r = r^3), which grows as 1/r towards
 the axis (first order at the first particle row; measured).  d_r v_z is odd, so its
@@ -123,7 +129,7 @@ def wall_state(x, v, rho, p, A, kind, offsets, indices, R, kcode, Lz, gravity, r
 
 @njit(cache=True, parallel=True)
 def gradients(x, rho, vg, A, kind, offsets, indices, R, sigma, kcode, Lz, cond_max, grad_rho,
-              dvdr, shep):
+              dvdr, shep, Bm):
     """Renormalised <grad rho>, <d_r (v_r / r)> and <d_r v_z> (``dvdr[:, 0]``, ``[:, 1]``)
     of the real FLUID rows.
 
@@ -175,6 +181,9 @@ def gradients(x, rho, vg, A, kind, offsets, indices, R, sigma, kcode, Lz, cond_m
             shep[i] += A[j] * sigma * kernels.kernel_f(d / R, kcode)
         good, c00, c01, c02, c10, c11, c12, c20, c21, c22 = invert_sym3(
             m00, m01, 0.0, m11, 0.0, 1.0, 2, cond_max)
+        Bm[i, 0] = c00 if good else 1.0
+        Bm[i, 1] = c01 if good else 0.0
+        Bm[i, 2] = c11 if good else 1.0
         if good:
             grad_rho[i, 0] = c00 * g0 + c01 * g1
             grad_rho[i, 1] = c10 * g0 + c11 * g1
@@ -189,7 +198,7 @@ def gradients(x, rho, vg, A, kind, offsets, indices, R, sigma, kcode, Lz, cond_m
 
 @njit(cache=True, parallel=True)
 def forces(x, v, vg, rho, p, A, mt, mu, kind, grad_rho, dvdr, offsets, indices, R, sigma,
-           kcode, Lz, gravity, eps2, delta_coef, art_coef, hoop, acc, drho):
+           kcode, Lz, gravity, eps2, delta_coef, art_coef, hoop, Bm, acc, drho):
     """Accelerations and density rates of the real FLUID rows (module docstring); other
     rows are zeroed.  ``hoop``: 1.0, or 0.0 to drop the hoop terms (planar mode).  Arrays
     run over the augmented set (real + mirrors, fields filled)."""
@@ -207,7 +216,10 @@ def forces(x, v, vg, rho, p, A, mt, mu, kind, grad_rho, dvdr, offsets, indices, 
         rr = x[i, 0]
         a0 = 0.0
         a1 = 0.0
-        cont = 0.0
+        G00 = 0.0  # sum_j A_j F_ij (v_j - v_i)_a (x_j - x_i)_b
+        G01 = 0.0
+        G10 = 0.0
+        G11 = 0.0
         diff = 0.0
         for jj in range(offsets[i], offsets[i + 1]):
             j = indices[jj]
@@ -232,12 +244,19 @@ def forces(x, v, vg, rho, p, A, mt, mu, kind, grad_rho, dvdr, offsets, indices, 
             a0 += cp * r0 + cv * u0
             a1 += cp * r1 + cv * u1
             VF = A[j] * F
-            cont -= VF * ((v[j, 0] - v[i, 0]) * r0 + (v[j, 1] - v[i, 1]) * r1)
+            w0 = VF * (v[j, 0] - v[i, 0])
+            w1 = VF * (v[j, 1] - v[i, 1])
+            G00 += w0 * r0
+            G01 += w0 * r1
+            G10 += w1 * r0
+            G11 += w1 * r1
             if fl:
                 gs = (grad_rho[i, 0] + grad_rho[j, 0]) * r0 + (grad_rho[i, 1]
                                                                + grad_rho[j, 1]) * r1
                 diff += ((rj - ri) - 0.5 * gs) * VF
         nu = mui / ri
+        # div_2 v = tr(G B): renormalised (B = identity: the plain sum)
+        cont = -(G00 * Bm[i, 0] + (G01 + G10) * Bm[i, 1] + G11 * Bm[i, 2])
         acc[i, 0] = a0 + hoop * nu * dvdr[i, 0] + gravity[0]
         acc[i, 1] = a1 + hoop * nu * dvdr[i, 1] / rr + gravity[1]
         drho[i] = ri * cont - hoop * ri * v[i, 0] / rr + delta_coef * 2.0 * diff
@@ -403,6 +422,7 @@ class AxisymmetricFluid:
         gr = np.zeros((m, 2))
         dvdr = np.zeros((m, 2))
         shep = np.zeros(m)
+        Bm = np.zeros((m, 3))
         circ = 1.0 if self.planar else 2.0 * math.pi * np.maximum(self.x[:, 0], 1e-300)
         A[:n] = np.where(fl, self.M / (circ * self.rho), self.vol)
         # mirrors of the fluid first (walls read them), then the walls' state
@@ -412,14 +432,16 @@ class AxisymmetricFluid:
         mt[:n] = rho[:n] * A[:n]
         _fill_mirrors(n, src, mtype, zw, self.gravity[1], x, v, vg, rho, p, A, mt, mu, gr, dvdr)
         gradients(x, rho, vg, A, kind, nl.offsets, nl.indices, R, self.sigma, self.kcode,
-                  self.Lz, pa.cond_max, gr, dvdr, shep)
+                  self.Lz, pa.cond_max, gr, dvdr, shep, Bm)
+        if self.planar:  # the plain planar divergence of FluidSolver
+            Bm[:] = (1.0, 0.0, 1.0)
         _fill_mirrors(n, src, mtype, zw, self.gravity[1], x, v, vg, rho, p, A, mt, mu, gr, dvdr)
         acc = np.zeros((m, 2))
         drho = np.zeros(m)
         forces(x, v, vg, rho, p, A, mt, mu, kind, gr, dvdr, nl.offsets, nl.indices, R,
                self.sigma, self.kcode, self.Lz, self.gravity, pa.eps_visc * self.h**2,
                pa.delta * self.h * pa.c0, pa.alpha * self.h * pa.c0,
-               0.0 if self.planar else 1.0, acc, drho)
+               0.0 if self.planar else 1.0, Bm, acc, drho)
         self.acc[:] = acc[:n]
         self.drho[:] = drho[:n]
         self.p[:] = p[:n]
