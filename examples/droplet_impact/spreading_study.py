@@ -248,28 +248,46 @@ _SHORT = {"pasandideh-fard-1996": "PF96", "ukiwe-kwok-2005": "UK05", "clanet-200
 
 
 def table(rows: list[dict]) -> str:
-    """Markdown table of the cases: D_max / D, its time, Re_eff and the correlations."""
-    names = list(_SHORT)
-    head = ("| case | v m/s | D/dx | alpha | wall | ST | Re_eff | D_max/D sheet | t_max/tc | "
-            "edge | area | removed | "
-            + " | ".join(f"{_SHORT[n]} Re" for n in names) + " | "
-            + " | ".join(f"{_SHORT[n]} Re_eff" for n in names) + " | steps | wall s |")
-    sep = "|" + "---|" * (head.count("|") - 1)
-    lines = [head, sep]
+    """Markdown tables: the cases (D_max / D three ways, the monolayer bound, the range of
+    the correlations at Re_eff) and the correlations at the physical Re of each speed."""
+    from sphfem.fluid.spreading import disc_spread_ratio
+
+    head = ("| case | v m/s | D/dx | alpha | wall | ST | Re_eff | D_max/D sheet | t/tc | "
+            "edge | area | monolayer | fluid N | out | below | correlations at Re_eff | "
+            "steps | wall s |")
+    lines = [head, "|" + "---|" * (head.count("|") - 1)]
     for r in rows:
         p = r["params"]
-        bm = r["beta_max"]
-        end = "*" if r["max_at_end"] else ""
         stop = " (stopped)" if r["status"] != "completed" else ""
+        ce = list(r["correlations_effective"].values())
+        mono = float(disc_spread_ratio(1.0 / p["n"]))
+        lay = r.get("layer", {})
+        below = max(lay["n_below"]) if lay.get("n_below") else None
+
+        def star(key, r=r):
+            return "*" if r[f"{key}_max_at_end"] else ""
+
         lines.append(
             f"| {r['case']}{stop} | {p['v']:g} | {p['n']} | {p['alpha']:g} | {p['wall']} | "
-            f"{p['st']} | {r['Re_eff']:.0f} | {bm:.2f}{end} | {r['t_max_tc']:.2f} | "
-            f"{r['beta_edge']:.2f}{'*' if r['edge_max_at_end'] else ''} | "
-            f"{r['beta_area']:.2f}{'*' if r['area_max_at_end'] else ''} | {r['removed']} | "
-            + " | ".join(f"{r['correlations_physical'][n]:.2f}" for n in names) + " | "
-            + " | ".join(f"{r['correlations_effective'][n]:.2f}" for n in names)
-            + f" | {r['steps']} | {r['wall_s']:.0f} |")
-    return "\n".join(lines) + "\n"
+            f"{p['st']} | {r['Re_eff']:.0f} | **{r['beta_sheet']:.2f}**{star('sheet')} | "
+            f"{r['t_sheet_tc']:.2f} | {r['beta_edge']:.2f}{star('edge')} | "
+            f"{r['beta_area']:.2f}{star('area')} | {mono:.2f} | "
+            f"{lay['n_fluid'][0] if lay else r['n_fluid']} | {r['removed']} | {below} | "
+            f"{min(ce):.2f}-{max(ce):.2f} | {r['steps']} | {r['wall_s']:.0f} |")
+    out = "\n".join(lines) + "\n\n"
+    names = list(_SHORT)
+    head = "| v m/s | We | Re | " + " | ".join(_SHORT[n] for n in names) + " |"
+    lines = [head, "|" + "---|" * (head.count("|") - 1)]
+    seen = set()
+    for r in rows:
+        key = (r["params"]["v"], r["params"]["st"])
+        if key in seen or r["params"]["st"] == "none":
+            continue
+        seen.add(key)
+        cp = r["correlations_physical"]
+        lines.append(f"| {key[0]:g} | {r['We']:.0f} | {r['Re']:.0f} | "
+                     + " | ".join(f"{cp[n]:.2f}" for n in names) + " |")
+    return out + "\n".join(lines) + "\n"
 
 
 def plot(rows: list[dict], path: Path) -> None:
