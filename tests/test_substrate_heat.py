@@ -155,3 +155,22 @@ def test_heat_defaults_follow_the_layer():
     assert p["depth"] == pytest.approx(8 * math.sqrt(a * 3.6e-6), rel=1e-14)
     assert p["h_surface"] == pytest.approx(math.sqrt(a * 3.6e-8) / 3, rel=1e-14)
     assert p["h_lateral"] == 3.125e-6 and p["lateral"] == ((-1.0, 1.0), (-2.0, 2.0))
+
+
+@pytest.mark.parametrize("lateral", [[(-1e-4, 1e-4)], [(-1e-4, 1e-4), (-5e-5, 5e-5)]])
+def test_tensor_probe_is_the_p1_interpolant(lateral):
+    """TensorProbe equals scikit-fem's probes (the P1 interpolant) to round-off on a
+    graded tensor mesh (2D and 3D), exact at nodes; every row sums to 1."""
+    from coupling.substrate_heat import TensorProbe
+    from sphfem.fem.heat_transient import TransientHeat, graded_mesh
+
+    m = graded_mesh(lateral, 2e-5, 1e-7, 1.2, h_lateral=1e-5)
+    h = TransientHeat(m, 10.0, 3950.0, 900.0, 0.0)
+    lo, hi = m.p.min(axis=1), m.p.max(axis=1)
+    X = lo + (hi - lo) * np.random.default_rng(0).random((300, m.p.shape[0]))
+    X[:5] = m.p[:, :5].T
+    h.T = 1.0 + 2.0 * m.p[0] / 1e-4 + 3.0 * np.sin(m.p[-1] / 1e-6)
+    P = TensorProbe(m)(X)
+    assert np.abs(P @ h.T - h.probe(X)).max() < 1e-12
+    assert np.abs(np.asarray(P.sum(axis=1)).ravel() - 1.0).max() < 1e-14
+    assert np.allclose(P[:5] @ h.T, h.T[:5], rtol=0, atol=1e-13)
