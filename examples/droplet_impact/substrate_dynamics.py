@@ -56,7 +56,8 @@ def substrate(h_fine: float, fine_extent: float = 40e-6, growth: float = 1.15):
     return AxisymmetricFEMSubstrate(mesh, E, NU, ALPHA, clamps=["bottom"])
 
 
-def run(c_f: float, dt: float, t_end: float, h_fine: float, sub=None) -> dict:
+def run(c_f: float, dt: float, t_end: float, h_fine: float, sub=None,
+        hht_alpha: float = 0.0) -> dict:
     """Peak element von Mises (value [Pa], time [s], element centroid (r, z) [m]) over the
     run, quasi-static and dynamic, and the histories of both peaks.  Element values (the
     r-weighted average over each quad) rather than the L2-projected nodal field: the
@@ -64,7 +65,7 @@ def run(c_f: float, dt: float, t_end: float, h_fine: float, sub=None) -> dict:
     sub = substrate(h_fine) if sub is None else sub
     centroids = sub.mesh.p[:, sub.mesh.t].mean(axis=1)
     deep = centroids[1] < -0.5 * THICK  # the lower half of the layer
-    dyn = ElastodynamicSubstrate(sub, RHO)
+    dyn = ElastodynamicSubstrate(sub, RHO, hht_alpha=hht_alpha)
     a, p = load_history(c_f)
     out = {"qs": {"peak": 0.0}, "dyn": {"peak": 0.0}, "qs_deep": {"peak": 0.0},
            "dyn_deep": {"peak": 0.0}, "t": [], "vm_qs": [], "vm_dyn": []}
@@ -104,18 +105,25 @@ def main(argv=None):
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--quick", action="store_true", help="coarse mesh and step")
     ap.add_argument("--t-end", type=float, default=0.4e-6)
+    ap.add_argument("--dt", type=float, nargs="+", help="steps [s] (default 1, 0.5, 0.25 ns)")
+    ap.add_argument("--h-fine", type=float, help="mesh spacing near the axis [m] (1 um)")
+    ap.add_argument("--hht-alpha", type=float, default=0.0, help="0: Newmark; < 0: HHT")
+    ap.add_argument("--c-f", type=float, nargs="+", default=[500.0, 1480.0])
     args = ap.parse_args(argv)
     h, dts = (2e-6, (1e-9,)) if args.quick else (1e-6, (1e-9, 0.5e-9, 0.25e-9))
+    h = args.h_fine or h
+    dts = args.dt or dts
     print(criterion(1480.0).table())
     print(f"c_f=500: {criterion(500.0).table().splitlines()[1]}")
     sub = substrate(h)
-    print(f"mesh: h_fine {h * 1e6:g} um, {sub.basis.N} dofs; t_end {args.t_end * 1e9:g} ns")
+    print(f"mesh: h_fine {h * 1e6:g} um, {sub.basis.N} dofs; t_end {args.t_end * 1e9:g} ns; "
+          f"HHT alpha {args.hht_alpha:g}")
     print("| c_f [m/s] | dt [ns] | model | peak von Mises [MPa] | at t [ns] | at (r, z) [um] "
           "| wall [s] |")
     print("|---|---|---|---|---|---|---|")
-    for c_f in (500.0, 1480.0):
+    for c_f in args.c_f:
         for dt in dts:
-            r = run(c_f, dt, args.t_end, h, sub)
+            r = run(c_f, dt, args.t_end, h, sub, args.hht_alpha)
             for key, name in (("qs", "quasi-static"), ("dyn", "dynamic"),
                               ("qs_deep", "quasi-static, z < -h/2"),
                               ("dyn_deep", "dynamic, z < -h/2")):
@@ -124,7 +132,7 @@ def main(argv=None):
                       f"{q['t'] * 1e9:.2f} | ({q['r'] * 1e6:.1f}, {q['z'] * 1e6:.1f}) | "
                       f"{r['seconds']:.0f} |")
             tt = np.asarray(r["t"])
-            for t_probe in (10e-9, 50e-9, 100e-9, 200e-9, 400e-9):
+            for t_probe in (2e-9, 5e-9, 10e-9, 50e-9, 100e-9, 200e-9, 400e-9):
                 i = int(np.argmin(np.abs(tt - t_probe)))
                 if abs(tt[i] - t_probe) < dt:
                     print(f"|   | t = {t_probe * 1e9:g} ns | dyn / qs peak | "
