@@ -46,6 +46,18 @@ axis see an even / odd continuation of the fields.  A particle that crosses the 
 step is reflected (r -> -r, v_r -> -v_r).  The hoop terms use r_i itself; no particle sits
 on the axis because mirrored pairs repel (their pressure term is symmetric about r = 0).
 
+Status (issue 16): validated on a hydrostatic column, Hagen-Poiseuille start-up in a pipe,
+prescribed-field kernel tests and a free drop flattened into a sheet; the planar mode equals
+the 2D :class:`~sphfem.fluid.wcsph.FluidSolver` to round-off.  NOT yet usable for a droplet
+impact: with D/dx = 16 at 10 m/s the run fails after ~0.5-1 t_c (fluid rings from near the
+axis are squeezed through the wall's first layers at the axis-wall corner, then tensile
+blow-up; a no-slip mirror wall plane fails likewise, by tension at ~0.6 t_c; an off-axis
+torus drop compresses its inner, converging sheet to twice rho0 at ~1.1 t_c).  The common
+cause is the fixed smoothing length: a ring moving from r0 to r has planar area A ~ r0 / r,
+so particles that travel far in r become much smaller (or larger) than the kernel and the
+wall spacing; Garcia-Senz & Relano-Pastor (2012) use h_i ~ sqrt(A_i) for this reason.
+Variable h (or particle splitting / merging) is the missing piece.
+
 Walls: Adami, Hu & Adams (2012) as in :mod:`sphfem.fluid.walls_adami2012`, with the planar
 kernel sums of the meridian plane (wall particles have a fixed meridian area ``vol``).
 Time stepping: the predictor-corrector position Verlet of :mod:`sphfem.fluid.wcsph`.
