@@ -98,11 +98,11 @@ def _isfluid(k):
 
 
 @njit(cache=True, parallel=True)
-def wall_state(x, v, rho, p, A, kind, offsets, indices, R, kcode, Lz, gravity, rho0, B, gamma,
-               vg):
+def wall_state(x, v, rho, p, A, kind, offsets, indices, Rp, kcode, Lz, gravity, rho0, B,
+               gamma, vg):
     """Adami wall pressure, density and ghost velocity of the real WALL rows (planar kernel
-    in the meridian plane; walls at rest, no prescribed acceleration)."""
-    R2 = R * R
+    in the meridian plane, support (R_i + R_j) / 2; walls at rest, no prescribed
+    acceleration)."""
     for i in prange(x.shape[0]):
         if kind[i] != WALL:
             continue
@@ -118,9 +118,10 @@ def wall_state(x, v, rho, p, A, kind, offsets, indices, R, kcode, Lz, gravity, r
             r0 = x[i, 0] - x[j, 0]
             r1 = min_image(x[i, 1] - x[j, 1], Lz)
             d2 = r0 * r0 + r1 * r1
-            if d2 >= R2:
+            R = 0.5 * (Rp[i] + Rp[j])
+            if d2 >= R * R:
                 continue
-            w = kernels.kernel_f(math.sqrt(d2) / R, kcode) * A[j]
+            w = kernels.kernel_f(math.sqrt(d2) / R, kcode) * A[j] / (R * R)
             sw += w
             sp += p[j] * w
             sh += rho[j] * w * (gravity[0] * r0 + gravity[1] * r1)
@@ -140,16 +141,15 @@ def wall_state(x, v, rho, p, A, kind, offsets, indices, R, kcode, Lz, gravity, r
 
 
 @njit(cache=True, parallel=True)
-def gradients(x, rho, vg, A, kind, offsets, indices, R, sigma, kcode, Lz, cond_max, grad_rho,
+def gradients(x, rho, vg, A, kind, offsets, indices, Rp, s2, kcode, Lz, cond_max, grad_rho,
               dvdr, shep, Bm):
     """Renormalised <grad rho>, <d_r (v_r / r)> and <d_r v_z> (``dvdr[:, 0]``, ``[:, 1]``)
     of the real FLUID rows.
 
     ``vg``: the velocity seen by the viscous terms (fluid: v, wall: Adami ghost velocity,
-    mirrors: the source's with v_r negated).  Rows that are not fluid are zeroed.
+    mirrors: the source's with v_r negated).  Rows that are not fluid are zeroed.  Pair
+    support (R_i + R_j) / 2, kernel normalisation ``s2`` / R^2.
     """
-    R2 = R * R
-    fac = sigma / R
     for i in prange(x.shape[0]):
         grad_rho[i, 0] = 0.0
         grad_rho[i, 1] = 0.0
@@ -165,7 +165,7 @@ def gradients(x, rho, vg, A, kind, offsets, indices, R, sigma, kcode, Lz, cond_m
         a0 = 0.0  # sum A F (q_j - q_i) r_ij, q = v_r / r
         a1 = 0.0
         qi = vg[i, 0] / x[i, 0]
-        shep[i] = A[i] * sigma  # Shepard sum, self included
+        shep[i] = A[i] * s2 / (Rp[i] * Rp[i])  # Shepard sum, self included
         b0 = 0.0  # sum A F (v_z,j - v_z,i) r_ij
         b1 = 0.0
         for jj in range(offsets[i], offsets[i + 1]):
@@ -173,8 +173,11 @@ def gradients(x, rho, vg, A, kind, offsets, indices, R, sigma, kcode, Lz, cond_m
             r0 = x[j, 0] - x[i, 0]
             r1 = min_image(x[j, 1] - x[i, 1], Lz)
             d2 = r0 * r0 + r1 * r1
-            if d2 >= R2 or d2 == 0.0:
+            R = 0.5 * (Rp[i] + Rp[j])
+            if d2 >= R * R or d2 == 0.0:
                 continue
+            sigma = s2 / (R * R)
+            fac = sigma / R
             d = math.sqrt(d2)
             s = A[j] * (-fac * kernels.kernel_dfdq(d / R, kcode) / d)
             m00 += s * r0 * r0
@@ -209,13 +212,13 @@ def gradients(x, rho, vg, A, kind, offsets, indices, R, sigma, kcode, Lz, cond_m
 
 
 @njit(cache=True, parallel=True)
-def forces(x, v, vg, rho, p, A, mt, mu, kind, grad_rho, dvdr, offsets, indices, R, sigma,
-           kcode, Lz, gravity, eps2, delta_coef, art_coef, hoop, Bm, acc, drho):
+def forces(x, v, vg, rho, p, A, mt, mu, kind, grad_rho, dvdr, offsets, indices, Rp, s2,
+           kcode, Lz, gravity, eps, delta_c, alpha_c, hoop, Bm, acc, drho):
     """Accelerations and density rates of the real FLUID rows (module docstring); other
     rows are zeroed.  ``hoop``: 1.0, or 0.0 to drop the hoop terms (planar mode).  Arrays
-    run over the augmented set (real + mirrors, fields filled)."""
-    R2 = R * R
-    fac = sigma / R
+    run over the augmented set (real + mirrors, fields filled).  Pair support R_ij =
+    (R_i + R_j) / 2 and h_ij = R_ij / 2 (kernel ``s2`` / R_ij^2 W(d / R_ij), the viscous
+    eps h_ij^2, the delta term delta_c h_ij, the artificial viscosity alpha_c h_ij)."""
     for i in prange(x.shape[0]):
         acc[i, 0] = 0.0
         acc[i, 1] = 0.0
@@ -238,8 +241,13 @@ def forces(x, v, vg, rho, p, A, mt, mu, kind, grad_rho, dvdr, offsets, indices, 
             r0 = x[j, 0] - x[i, 0]
             r1 = min_image(x[j, 1] - x[i, 1], Lz)
             d2 = r0 * r0 + r1 * r1
-            if d2 >= R2 or d2 == 0.0:
+            R = 0.5 * (Rp[i] + Rp[j])
+            if d2 >= R * R or d2 == 0.0:
                 continue
+            hij = 0.5 * R
+            eps2 = eps * hij * hij
+            art_coef = alpha_c * hij
+            fac = s2 / (R * R * R)
             d = math.sqrt(d2)
             F = -fac * kernels.kernel_dfdq(d / R, kcode) / d
             rj = rho[j]
@@ -265,17 +273,17 @@ def forces(x, v, vg, rho, p, A, mt, mu, kind, grad_rho, dvdr, offsets, indices, 
             if fl:
                 gs = (grad_rho[i, 0] + grad_rho[j, 0]) * r0 + (grad_rho[i, 1]
                                                                + grad_rho[j, 1]) * r1
-                diff += ((rj - ri) - 0.5 * gs) * VF
+                diff += ((rj - ri) - 0.5 * gs) * VF * delta_c * hij
         nu = mui / ri
         # div_2 v = tr(G B): renormalised (B = identity: the plain sum)
         cont = -(G00 * Bm[i, 0] + (G01 + G10) * Bm[i, 1] + G11 * Bm[i, 2])
         acc[i, 0] = a0 + hoop * nu * dvdr[i, 0] + gravity[0]
         acc[i, 1] = a1 + hoop * nu * dvdr[i, 1] / rr + gravity[1]
-        drho[i] = ri * cont - hoop * ri * v[i, 0] / rr + delta_coef * 2.0 * diff
+        drho[i] = ri * cont - hoop * ri * v[i, 0] / rr + 2.0 * diff
 
 
 @njit(cache=True)
-def _fill_mirrors(n, src, mtype, zw, gz, x, v, vg, rho, p, A, mt, mu, grad_rho, dvdr):
+def _fill_mirrors(n, src, mtype, zw, gz, x, v, vg, rho, p, A, mt, mu, grad_rho, dvdr, Rp):
     """Copy the sources' fields onto the mirrors n + q, in order (a source may be an earlier
     mirror).  ``mtype`` 0: image across the axis (r, v_r, vg_r, grad_r rho and the
     r-derivatives in ``dvdr`` negated); 1: image across the wall plane z = ``zw`` (z,
@@ -286,6 +294,7 @@ def _fill_mirrors(n, src, mtype, zw, gz, x, v, vg, rho, p, A, mt, mu, grad_rho, 
         g = n + q
         rho[g] = rho[s]
         A[g] = A[s]
+        Rp[g] = Rp[s]
         mt[g] = mt[s]
         mu[g] = mu[s]
         if mtype[q] == 0:
@@ -336,7 +345,7 @@ class AxisymmetricFluid:
 
     def __init__(self, x, v, rho, kind, M, vol, R, params: FluidParams,
                  kernel: str = "wendland_c2", periodic_z=None, planar: bool = False,
-                 wall_z: float | None = None):
+                 wall_z: float | None = None, adaptive_h: bool = False):
         self.x = np.array(x, dtype=np.float64)
         n = self.n = self.x.shape[0]
         self.v = np.array(v, dtype=np.float64).reshape(n, 2)
@@ -354,6 +363,7 @@ class AxisymmetricFluid:
         self.h = 0.5 * self.R
         self.kcode = kernels.kernel_code(kernel)
         self.sigma = kernels.kernel_sigma(self.kcode, 2, self.R)
+        self.s2 = self.sigma * self.R**2
         self.B = tait_B(pa.rho0, pa.c0, pa.gamma)
         self.gravity = np.zeros(2)
         gp = np.asarray(pa.gravity, float).reshape(-1)
@@ -370,14 +380,32 @@ class AxisymmetricFluid:
         self.t = 0.0
         self.step_count = 0
         self.wall_s = {"neighbors": 0.0, "forces": 0.0}
+        self.adaptive_h = bool(adaptive_h)
+        #: reference meridian area a_ref: R_i = R sqrt(A_i / a_ref) (adaptive_h)
+        self.a_ref = float(np.median(self._areas()[self.fluid])) if self.fluid.any() else 1.0
+        self.Rp = np.full(n, self.R)
         self.evaluate()
+
+    def _areas(self) -> np.ndarray:
+        circ = 1.0 if self.planar else 2.0 * math.pi * np.maximum(self.x[:, 0], 1e-300)
+        return np.where(self.fluid, self.M / (circ * self.rho), self.vol)
+
+    def support_radii(self, A) -> np.ndarray:
+        """Per-particle support radii: R everywhere, or with ``adaptive_h`` R_i = R
+        sqrt(A_i / a_ref) clipped to [R / 2, 2 R] (h_i ~ sqrt(A_i), so the number of planar
+        neighbours stays constant as rings change their meridian area A ~ r0 / r;
+        Garcia-Senz & Relano-Pastor 2012, sec. 2; pair kernels use (R_i + R_j) / 2,
+        Hernquist & Katz 1989, eq. 2.21, which keeps the pair forces antisymmetric)."""
+        if not self.adaptive_h:
+            return np.full(A.shape[0], self.R)
+        return np.clip(self.R * np.sqrt(A / self.a_ref), 0.5 * self.R, 2.0 * self.R)
 
     # -- one force evaluation ------------------------------------------------------------
     def _mirrors(self):
         """Sources, types and kinds of the mirrors: images of the fluid across the wall plane
         (if any), then images across the axis of every particle and wall-plane image with
         r < R (the corner images are axis images of wall-plane images)."""
-        n, R = self.n, self.R
+        n, R = self.n, float(self.Rp.max())
         srcs, types = [], []
         if self.wall_z is not None:
             s1 = np.flatnonzero(self.fluid & (self.x[:, 1] - self.wall_z < R))
@@ -402,7 +430,10 @@ class AxisymmetricFluid:
     def evaluate(self) -> None:
         """Pressures, wall states, mirrors, gradients, accelerations and density rates."""
         t0 = time.perf_counter()
-        pa, n, R = self.params, self.n, self.R
+        pa, n = self.params, self.n
+        A0 = self._areas()
+        self.Rp = self.support_radii(A0)
+        R = float(self.Rp.max())
         src, mtype, kind = self._mirrors()
         m = n + src.shape[0]
         x = np.empty((m, 2))
@@ -410,7 +441,7 @@ class AxisymmetricFluid:
         zw = 0.0 if self.wall_z is None else self.wall_z
         _fill_mirrors(n, src, mtype, zw, self.gravity[1], x, x.copy(), x.copy(),
                       np.zeros(m), np.zeros(m), np.zeros(m), np.zeros(m), np.zeros(m),
-                      np.zeros((m, 2)), np.zeros((m, 2)))
+                      np.zeros((m, 2)), np.zeros((m, 2)), np.zeros(m))
         lo = x.min(axis=0) - R
         hi = x.max(axis=0) + R
         period = np.zeros(2)
@@ -435,24 +466,28 @@ class AxisymmetricFluid:
         dvdr = np.zeros((m, 2))
         shep = np.zeros(m)
         Bm = np.zeros((m, 3))
-        circ = 1.0 if self.planar else 2.0 * math.pi * np.maximum(self.x[:, 0], 1e-300)
-        A[:n] = np.where(fl, self.M / (circ * self.rho), self.vol)
+        A[:n] = A0
+        Rp = np.zeros(m)
+        Rp[:n] = self.Rp
         # mirrors of the fluid first (walls read them), then the walls' state
-        _fill_mirrors(n, src, mtype, zw, self.gravity[1], x, v, vg, rho, p, A, mt, mu, gr, dvdr)
-        wall_state(x, v, rho, p, A, kind, nl.offsets, nl.indices, R, self.kcode, self.Lz,
+        _fill_mirrors(n, src, mtype, zw, self.gravity[1], x, v, vg, rho, p, A, mt, mu, gr, dvdr,
+                      Rp)
+        wall_state(x, v, rho, p, A, kind, nl.offsets, nl.indices, Rp, self.kcode, self.Lz,
                    self.gravity, pa.rho0, self.B, pa.gamma, vg)
         mt[:n] = rho[:n] * A[:n]
-        _fill_mirrors(n, src, mtype, zw, self.gravity[1], x, v, vg, rho, p, A, mt, mu, gr, dvdr)
-        gradients(x, rho, vg, A, kind, nl.offsets, nl.indices, R, self.sigma, self.kcode,
+        _fill_mirrors(n, src, mtype, zw, self.gravity[1], x, v, vg, rho, p, A, mt, mu, gr, dvdr,
+                      Rp)
+        gradients(x, rho, vg, A, kind, nl.offsets, nl.indices, Rp, self.s2, self.kcode,
                   self.Lz, pa.cond_max, gr, dvdr, shep, Bm)
         if self.planar:  # the plain planar divergence of FluidSolver
             Bm[:] = (1.0, 0.0, 1.0)
-        _fill_mirrors(n, src, mtype, zw, self.gravity[1], x, v, vg, rho, p, A, mt, mu, gr, dvdr)
+        _fill_mirrors(n, src, mtype, zw, self.gravity[1], x, v, vg, rho, p, A, mt, mu, gr, dvdr,
+                      Rp)
         acc = np.zeros((m, 2))
         drho = np.zeros(m)
-        forces(x, v, vg, rho, p, A, mt, mu, kind, gr, dvdr, nl.offsets, nl.indices, R,
-               self.sigma, self.kcode, self.Lz, self.gravity, pa.eps_visc * self.h**2,
-               pa.delta * self.h * pa.c0, pa.alpha * self.h * pa.c0,
+        forces(x, v, vg, rho, p, A, mt, mu, kind, gr, dvdr, nl.offsets, nl.indices, Rp,
+               self.s2, self.kcode, self.Lz, self.gravity, pa.eps_visc, pa.delta * pa.c0,
+               pa.alpha * pa.c0,
                0.0 if self.planar else 1.0, Bm, acc, drho)
         self.acc[:] = acc[:n]
         self.drho[:] = drho[:n]
@@ -468,12 +503,13 @@ class AxisymmetricFluid:
         """Acoustic, viscous and force limits [s] (as :meth:`FluidSolver.dt_limits`)."""
         pa, fl = self.params, self.fluid
         vmax = float(np.sqrt((self.v[fl] ** 2).sum(axis=1)).max())
+        h = 0.5 * float(self.Rp[fl].min())
         amax = float(np.sqrt((self.acc[fl] ** 2).sum(axis=1)).max())
-        lim = {"acoustic": pa.cfl * self.h / (pa.c0 + vmax)}
+        lim = {"acoustic": pa.cfl * h / (pa.c0 + vmax)}
         if pa.mu > 0:
-            lim["viscous"] = pa.visc_cfl * self.h**2 * float(self.rho[fl].min()) / pa.mu
+            lim["viscous"] = pa.visc_cfl * h**2 * float(self.rho[fl].min()) / pa.mu
         if amax > 0:
-            lim["force"] = pa.force_cfl * math.sqrt(self.h / amax)
+            lim["force"] = pa.force_cfl * math.sqrt(h / amax)
         return lim
 
     def stable_dt(self) -> float:
