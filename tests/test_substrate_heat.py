@@ -9,70 +9,13 @@ import re
 
 import numpy as np
 import pytest
+from test_coupling import HOT  # the hot water block on alumina of the SPH-heat path
 
-SLAB = """
-[scene]
-name = "slab_contact"
-dim = 2
-
-[domain]
-lo = [-0.6e-3, -0.3e-3]
-hi = [0.6e-3, 0.3e-3]
-
-[sph]
-dx = 25e-6
-
-[materials.water]
-rho0 = 1000.0
-c = 4000.0
-k = 0.6
-
-[materials.alumina]
-rho0 = 3950.0
-c = 900.0
-k = 10.0
-E = 300e9
-nu = 0.21
-alpha = 8.1e-6
-
-[[blocks]]
-name = "substrate"
-shape = "box"
-kind = "solid"
-material = "alumina"
-lo = [-0.5e-3, -0.25e-3]
-hi = [0.5e-3, 0.0]
-temperature = "20 C"
-
-[[blocks]]
-name = "hot"
-shape = "box"
-kind = "fluid"
-material = "water"
-lo = [-0.2e-3, 0.0]
-hi = [0.2e-3, 0.1e-3]
-temperature = "100 C"
-
-[physics]
-modules = ["heat", "coupling"]
-
-[coupling]
-material = "alumina"
-clamps = ["left", "right"]
-every_k_steps = 1
-vtu_every = 0
-
-[coupling.heat]
-model = "fem-contact"
-
-[coupling.mesh]
-h_fine = 25e-6
-cells = "tri"
-
-[time]
-t_end = 1.0e-6
-dt = 0.1e-6
-"""
+#: the same scene with the FEM contact heat, every step coupled, a fine time step
+SLAB = (HOT.replace("every_k_steps = 3", "every_k_steps = 1")
+        .replace("vtu_every = 2", "vtu_every = 0")
+        .replace("[coupling.mesh]", '[coupling.heat]\nmodel = "fem-contact"\n\n[coupling.mesh]')
+        .replace("t_end = 6e-4", "t_end = 1.0e-6\ndt = 0.1e-6"))
 
 
 @pytest.fixture
@@ -94,6 +37,8 @@ def test_fem_contact_slab_matches_the_contact_solution(tmp_path, cache):
     from sphfem.particles import FLUID
     from sphfem.scene import parse_scene_toml
 
+    for edit in ('model = "fem-contact"', "every_k_steps = 1", "dt = 0.1e-6"):
+        assert edit in SLAB  # HOT still has the lines SLAB edits
     res = run(parse_scene_toml(SLAB), tmp_path / "out")
     d = res.summary["diagnostics"]["coupling"]["substrate_heat"]
     ef, es = math.sqrt(0.6 * 1000 * 4000), math.sqrt(10 * 3950 * 900)
