@@ -561,6 +561,24 @@ class FEMSubstrate:
         return cells, pts
 
     # ------------------------------------------------------------------ solve
+    def load_vector(self, dT_nodal=None, tractions=None, point_forces=None, body_force=None,
+                    T_nodal=None, snap: str | None = "top", load=None):
+        """(f, dT): the nodal load vector of :meth:`solve`'s loads and the temperature change
+        as given (also the elastodynamic substrate's load, sphfem.fem.elastodynamic)."""
+        dT_nodal = temperature_change(dT_nodal, T_nodal, self.T0)
+        f = self.basis.zeros()
+        if dT_nodal is not None:
+            f += self.thermal_load(dT_nodal)
+        if tractions:
+            f += self.traction_load(tractions)
+        if point_forces is not None:
+            f += self.point_force_load(*point_forces, snap=snap)
+        if body_force is not None:
+            f += self.body_force_load(body_force)
+        if load is not None:
+            f += np.asarray(load, dtype=float)
+        return f, dT_nodal
+
     def solve(self, dT_nodal=None, tractions=None, point_forces=None, body_force=None,
               T_nodal=None, snap: str | None = "top", load=None) -> FEMResult:
         """Solve K u = f for this step's loads (K is not refactorised).
@@ -574,18 +592,8 @@ class FEMSubstrate:
         load : a ready nodal load vector (e.g. a coupling transfer's P^T F), added as is.
         """
         t0 = time.perf_counter()
-        dT_nodal = temperature_change(dT_nodal, T_nodal, self.T0)
-        f = self.basis.zeros()
-        if dT_nodal is not None:
-            f += self.thermal_load(dT_nodal)
-        if tractions:
-            f += self.traction_load(tractions)
-        if point_forces is not None:
-            f += self.point_force_load(*point_forces, snap=snap)
-        if body_force is not None:
-            f += self.body_force_load(body_force)
-        if load is not None:
-            f += np.asarray(load, dtype=float)
+        f, dT_nodal = self.load_vector(dT_nodal, tractions, point_forces, body_force, T_nodal,
+                                       snap, load)
         t1 = time.perf_counter()
         u = self.basis.zeros()
         info = {"assemble_load_s": t1 - t0}
