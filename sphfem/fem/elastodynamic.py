@@ -52,7 +52,6 @@ from scipy.sparse.linalg import splu
 from skfem import BilinearForm
 
 from sphfem.fem.substrate import FEMResult
-from sphfem.loads import temperature_change
 
 logger = logging.getLogger(__name__)
 
@@ -152,23 +151,10 @@ class ElastodynamicSubstrate:
         return {"kinetic": kin, "strain": pot, "total": kin + pot}
 
     # ------------------------------------------------------------------ loads
-    def load_vector(self, dT_nodal=None, tractions=None, point_forces=None, body_force=None,
-                    T_nodal=None, snap: str | None = "top", load=None):
-        """(f, dT) assembled as :meth:`sphfem.fem.FEMSubstrate.solve` does."""
-        s = self.sub
-        dT = temperature_change(dT_nodal, T_nodal, s.T0)
-        f = s.basis.zeros()
-        if dT is not None:
-            f += s.thermal_load(dT)
-        if tractions:
-            f += s.traction_load(tractions)
-        if point_forces is not None:
-            f += s.point_force_load(*point_forces, snap=snap)
-        if body_force is not None:
-            f += s.body_force_load(body_force)
-        if load is not None:
-            f += np.asarray(load, dtype=float)
-        return f, dT
+    def load_vector(self, **loads):
+        """(f, dT) of the loads (keywords of :meth:`sphfem.fem.FEMSubstrate.solve`),
+        assembled by the substrate (:meth:`sphfem.fem.FEMSubstrate.load_vector`)."""
+        return self.sub.load_vector(**loads)
 
     def _solver(self, dt: float):
         """(factorisation, step size) for ``dt``: a cached size within ``DT_RTOL`` of dt is
