@@ -11,7 +11,16 @@ import numpy as np
 from scipy.sparse.linalg import eigsh
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[3] / "tests"))
-from test_elastodynamic import CP, RHO, L, _energy_run, _period, bar, tip_dof  # noqa: E402
+from test_elastodynamic import (  # noqa: E402
+    CP,
+    RHO,
+    L,
+    _energy_run,
+    _period,
+    bar,
+    step_wave,
+    tip_dof,
+)
 
 from sphfem.fem.elastodynamic import ElastodynamicSubstrate  # noqa: E402
 
@@ -20,17 +29,7 @@ print("(a) step wave: n, L2 error of u(L/2, t), arrival error / (h/c), plateau e
 for n in (50, 100, 200):
     t0 = time.perf_counter()
     p = 1e-3
-    sub, dyn = bar(n)
-    h = L / n
-    dt = 0.5 * h / CP
-    xs = np.array([[0.5 * L, 0.5 * h]])
-    ts, us, ss = [], [], []
-    for _ in range(int(1.4 * L / CP / dt)):
-        pr = dyn.step(dt, tractions={"right": np.array([-p, 0.0])}).probe(xs)
-        ts.append(dyn.t)
-        us.append(pr["u"][0, 0])
-        ss.append(pr["stress"][0, 0, 0])
-    t, u, s = map(np.asarray, (ts, us, ss))
+    t, u, s, h = step_wave(n, p)
     u_ex = -(p / (RHO * CP)) * np.maximum(t - 0.5 * L / CP, 0.0)
     e = np.linalg.norm(u - u_ex) / np.linalg.norm(u_ex)
     t_arr = t[np.argmax(s < -0.5 * p)]
