@@ -79,7 +79,8 @@ def record(t, r, z, m, v, dx, p):
             float(np.sqrt((v * v).sum(axis=1)).max()) / V, z.min() / dx, p.min() / (RHO * V * V))
 
 
-def run_axi(dx, t_end_tc, half_width):
+def run_axi(dx, t_end_tc, half_width, smooth_hoop=True, wall_normals=False,
+            adaptive_h=False):
     from sphfem.fluid.axisymmetric import AxisymmetricFluid
     from sphfem.particles import FLUID, WALL
 
@@ -90,7 +91,12 @@ def run_axi(dx, t_end_tc, half_width):
     v[: len(xf), 1] = -V
     M = np.r_[2 * math.pi * xf[:, 0] * RHO * dx * dx, np.zeros(len(xw))]
     t0 = time.perf_counter()
-    f = AxisymmetricFluid(x, v, np.full(len(x), RHO), kind, M, dx * dx, 3 * dx, params())
+    nrm = None
+    if wall_normals:  # the wall plane z = 0: n = e_z
+        nrm = np.zeros_like(x)
+        nrm[len(xf):, 1] = 1.0
+    f = AxisymmetricFluid(x, v, np.full(len(x), RHO), kind, M, dx * dx, 3 * dx, params(),
+                          smooth_hoop=smooth_hoop, wall_normals=nrm, adaptive_h=adaptive_h)
     hist = []
 
     def rec(s):
@@ -99,7 +105,9 @@ def run_axi(dx, t_end_tc, half_width):
 
     rec(f)
     f.run(t_end_tc * T_C, rec, every=0.1 * T_C)
-    return dict(mode="axi", dx=dx, fluid=int(len(xf)), wall=int(len(xw)), steps=f.step_count,
+    return dict(mode="axi", smooth_hoop=smooth_hoop, wall_normals=wall_normals,
+                adaptive_h=adaptive_h, dx=dx, fluid=int(len(xf)), wall=int(len(xw)),
+                steps=f.step_count,
                 seconds=time.perf_counter() - t0, history=hist)
 
 
@@ -157,11 +165,20 @@ def main():
     ap.add_argument("--tc", type=float, default=4.0, help="end time in t_c")
     ap.add_argument("--half-width", type=float, default=0.3e-3)
     ap.add_argument("--out")
+    ap.add_argument("--pointwise-hoop", action="store_true",
+                    help="axi: the hoop term v_r,i / r_i of the particle itself (old default)")
+    ap.add_argument("--wall-normals", action="store_true",
+                    help="axi: free-slip ghost velocity of the wall in the continuity")
+    ap.add_argument("--adaptive-h", action="store_true", help="axi: h_i ~ sqrt(A_i)")
     a = ap.parse_args()
     if a.mode == "compare":
         compare(*(json.load(open(f)) for f in a.files))
         return
-    res = (run_axi if a.mode == "axi" else run_3d)(a.dx, a.tc, a.half_width)
+    if a.mode == "axi":
+        res = run_axi(a.dx, a.tc, a.half_width, not a.pointwise_hoop, a.wall_normals,
+                      a.adaptive_h)
+    else:
+        res = run_3d(a.dx, a.tc, a.half_width)
     print(json.dumps({k: v for k, v in res.items() if k != "history"}))
     if a.out:
         with open(a.out, "w") as fh:

@@ -142,13 +142,14 @@ def wall_state(x, v, rho, p, A, kind, offsets, indices, Rp, kcode, Lz, gravity, 
 
 @njit(cache=True, parallel=True)
 def gradients(x, rho, vg, A, kind, offsets, indices, Rp, s2, kcode, Lz, cond_max, grad_rho,
-              dvdr, shep, Bm):
+              dvdr, shep, Bm, qs):
     """Renormalised <grad rho>, <d_r (v_r / r)> and <d_r v_z> (``dvdr[:, 0]``, ``[:, 1]``)
     of the real FLUID rows.
 
     ``vg``: the velocity seen by the viscous terms (fluid: v, wall: Adami ghost velocity,
     mirrors: the source's with v_r negated).  Rows that are not fluid are zeroed.  Pair
-    support (R_i + R_j) / 2, kernel normalisation ``s2`` / R^2.
+    support (R_i + R_j) / 2, kernel normalisation ``s2`` / R^2.  ``qs``: the Shepard
+    average over the fluid (and its mirrors), self included, of v_r / r.
     """
     for i in prange(x.shape[0]):
         grad_rho[i, 0] = 0.0
@@ -168,6 +169,8 @@ def gradients(x, rho, vg, A, kind, offsets, indices, Rp, s2, kcode, Lz, cond_max
         shep[i] = A[i] * s2 / (Rp[i] * Rp[i])  # Shepard sum, self included
         b0 = 0.0  # sum A F (v_z,j - v_z,i) r_ij
         b1 = 0.0
+        wq = shep[i]
+        sq = wq * qi
         for jj in range(offsets[i], offsets[i + 1]):
             j = indices[jj]
             r0 = x[j, 0] - x[i, 0]
@@ -193,7 +196,12 @@ def gradients(x, rho, vg, A, kind, offsets, indices, Rp, s2, kcode, Lz, cond_max
             u = s * (vg[j, 1] - vg[i, 1])
             b0 += u * r0
             b1 += u * r1
-            shep[i] += A[j] * sigma * kernels.kernel_f(d / R, kcode)
+            w = A[j] * sigma * kernels.kernel_f(d / R, kcode)
+            shep[i] += w
+            if _isfluid(kind[j]):
+                wq += w
+                sq += w * qj
+        qs[i] = sq / wq
         good, c00, c01, c02, c10, c11, c12, c20, c21, c22 = invert_sym3(
             m00, m01, 0.0, m11, 0.0, 1.0, 2, cond_max)
         Bm[i, 0] = c00 if good else 1.0
@@ -212,8 +220,8 @@ def gradients(x, rho, vg, A, kind, offsets, indices, Rp, s2, kcode, Lz, cond_max
 
 
 @njit(cache=True, parallel=True)
-def forces(x, v, vg, rho, p, A, mt, mu, kind, grad_rho, dvdr, offsets, indices, Rp, s2,
-           kcode, Lz, gravity, eps, delta_c, alpha_c, hoop, Bm, acc, drho):
+def forces(x, v, vg, vd, rho, p, A, mt, mu, kind, grad_rho, dvdr, offsets, indices, Rp, s2,
+           kcode, Lz, gravity, eps, delta_c, alpha_c, hoop, Bm, qh, acc, drho):
     """Accelerations and density rates of the real FLUID rows (module docstring); other
     rows are zeroed.  ``hoop``: 1.0, or 0.0 to drop the hoop terms (planar mode).  Arrays
     run over the augmented set (real + mirrors, fields filled).  Pair support R_ij =
@@ -264,8 +272,8 @@ def forces(x, v, vg, rho, p, A, mt, mu, kind, grad_rho, dvdr, offsets, indices, 
             a0 += cp * r0 + cv * u0
             a1 += cp * r1 + cv * u1
             VF = A[j] * F
-            w0 = VF * (v[j, 0] - v[i, 0])
-            w1 = VF * (v[j, 1] - v[i, 1])
+            w0 = VF * (vd[j, 0] - v[i, 0])
+            w1 = VF * (vd[j, 1] - v[i, 1])
             G00 += w0 * r0
             G01 += w0 * r1
             G10 += w1 * r0
@@ -279,7 +287,7 @@ def forces(x, v, vg, rho, p, A, mt, mu, kind, grad_rho, dvdr, offsets, indices, 
         cont = -(G00 * Bm[i, 0] + (G01 + G10) * Bm[i, 1] + G11 * Bm[i, 2])
         acc[i, 0] = a0 + hoop * nu * dvdr[i, 0] + gravity[0]
         acc[i, 1] = a1 + hoop * nu * dvdr[i, 1] / rr + gravity[1]
-        drho[i] = ri * cont - hoop * ri * v[i, 0] / rr + 2.0 * diff
+        drho[i] = ri * cont - hoop * ri * qh[i] + 2.0 * diff
 
 
 @njit(cache=True)
@@ -345,7 +353,8 @@ class AxisymmetricFluid:
 
     def __init__(self, x, v, rho, kind, M, vol, R, params: FluidParams,
                  kernel: str = "wendland_c2", periodic_z=None, planar: bool = False,
-                 wall_z: float | None = None, adaptive_h: bool = False):
+                 wall_z: float | None = None, adaptive_h: bool = False, wall_normals=None,
+                 smooth_hoop: bool = False):
         self.x = np.array(x, dtype=np.float64)
         n = self.n = self.x.shape[0]
         self.v = np.array(v, dtype=np.float64).reshape(n, 2)
@@ -381,6 +390,9 @@ class AxisymmetricFluid:
         self.step_count = 0
         self.wall_s = {"neighbors": 0.0, "forces": 0.0}
         self.adaptive_h = bool(adaptive_h)
+        self.smooth_hoop = bool(smooth_hoop)
+        self.wall_normals = None if wall_normals is None else np.asarray(
+            wall_normals, float).reshape(n, 2)
         #: reference meridian area a_ref: R_i = R sqrt(A_i / a_ref) (adaptive_h)
         self.a_ref = float(np.median(self._areas()[self.fluid])) if self.fluid.any() else 1.0
         self.Rp = np.full(n, self.R)
@@ -466,6 +478,7 @@ class AxisymmetricFluid:
         dvdr = np.zeros((m, 2))
         shep = np.zeros(m)
         Bm = np.zeros((m, 3))
+        qs = np.zeros(m)
         A[:n] = A0
         Rp = np.zeros(m)
         Rp[:n] = self.Rp
@@ -478,17 +491,19 @@ class AxisymmetricFluid:
         _fill_mirrors(n, src, mtype, zw, self.gravity[1], x, v, vg, rho, p, A, mt, mu, gr, dvdr,
                       Rp)
         gradients(x, rho, vg, A, kind, nl.offsets, nl.indices, Rp, self.s2, self.kcode,
-                  self.Lz, pa.cond_max, gr, dvdr, shep, Bm)
+                  self.Lz, pa.cond_max, gr, dvdr, shep, Bm, qs)
+        qh = qs if self.smooth_hoop else v[:, 0] / np.where(x[:, 0] != 0.0, x[:, 0], 1.0)
         if self.planar:  # the plain planar divergence of FluidSolver
             Bm[:] = (1.0, 0.0, 1.0)
         _fill_mirrors(n, src, mtype, zw, self.gravity[1], x, v, vg, rho, p, A, mt, mu, gr, dvdr,
                       Rp)
+        vd = self._divergence_velocity(v, vg, kind, m)
         acc = np.zeros((m, 2))
         drho = np.zeros(m)
-        forces(x, v, vg, rho, p, A, mt, mu, kind, gr, dvdr, nl.offsets, nl.indices, Rp,
+        forces(x, v, vg, vd, rho, p, A, mt, mu, kind, gr, dvdr, nl.offsets, nl.indices, Rp,
                self.s2, self.kcode, self.Lz, self.gravity, pa.eps_visc, pa.delta * pa.c0,
                pa.alpha * pa.c0,
-               0.0 if self.planar else 1.0, Bm, acc, drho)
+               0.0 if self.planar else 1.0, Bm, qh, acc, drho)
         self.acc[:] = acc[:n]
         self.drho[:] = drho[:n]
         self.p[:] = p[:n]
@@ -497,6 +512,30 @@ class AxisymmetricFluid:
         #: plane; ~1/2 at a free surface)
         self.shepard = shep[:n].copy()
         self.wall_s["forces"] += time.perf_counter() - t1
+
+    def _divergence_velocity(self, v, vg, kind, m):
+        """The velocity the continuity's divergence sees: the fluid's (and its mirrors'); at
+        wall particles with normals the free-slip ghost ṽ - 2 ((ṽ - v_w) . n) n of the
+        Adami-extrapolated fluid velocity ṽ = 2 v_w - vg (the normal velocity then passes
+        v_w . n at the wall surface, the tangential one is continued smoothly); without normals
+        the wall's own velocity."""
+        vd = v.copy()
+        if self.wall_normals is None:
+            return vd
+        n = self.n
+        w = np.flatnonzero(self.kind == WALL)
+        nrm = self.wall_normals[w]
+        vt = 2.0 * v[w] - vg[w]
+        un = ((vt - v[w]) * nrm).sum(axis=1)
+        vd[w] = vt - 2.0 * un[:, None] * nrm
+        # the axis mirrors of walls: copy with v_r negated
+        src, mtype, _ = self._mirrors()
+        for q in range(src.shape[0]):
+            s_ = src[q]
+            if s_ < n and self.kind[s_] == WALL and mtype[q] == 0:
+                vd[n + q, 0] = -vd[s_, 0]
+                vd[n + q, 1] = vd[s_, 1]
+        return vd
 
     # -- time stepping -------------------------------------------------------------------
     def dt_limits(self) -> dict[str, float]:
