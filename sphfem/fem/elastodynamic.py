@@ -266,7 +266,7 @@ class QuasiStaticCheck:
     transit: dict  #: h/c_P, h/c_S, lateral half-width / c_R
     period: float  #: slowest thickness mode of the layer held at its base: 4 h / c_S
     load_times: dict  #: the loading's time scales as given
-    amplification: dict  #: envelope 1 + T_1 / (pi t) of the ramp amplification per time scale
+    amplification: dict  #: envelope min(2, 1 + T_1 / (pi t)) of the ramp amplification
     tolerance: float
     applies: dict  #: per load time scale: amplification - 1 <= tolerance
 
@@ -287,14 +287,16 @@ def quasi_static_check(E: float, nu: float, rho: float, thickness: float,
     A layer of thickness h held at its base (the clamped substrate) has its slowest
     standing mode at the fixed-free thickness resonance of shear waves, T_1 = 4 h / c_S
     (the P-wave one, 4 h / c_P, is faster).  A load that rises over t_r excites it with
-    the peak amplification of :func:`ramp_amplification`; the quasi-static answer is within
-    ``tolerance`` when 1 + 1 / (pi t_r / T_1) <= 1 + tolerance (the envelope), i.e.
+    the peak amplification of :func:`ramp_amplification`, at most its envelope
+    min(2, 1 + T_1 / (pi t_r)) (2: a step); the quasi-static answer is within ``tolerance``
+    when T_1 / (pi t_r) <= tolerance, i.e.
     t_r >= T_1 / (pi tolerance).  The lateral transit half_width / c_R is reported: edge
     reflections return after twice it.  ``load_times`` names the time scales, e.g.
     ``{"water hammer R/c_f": R / c_f, "contact D/v": D / v}``."""
     c = wave_speeds(E, nu, rho)
     T1 = 4.0 * thickness / c["S"]
-    amp = {k: 1.0 + (T1 / (np.pi * t) if t > 0 else 1.0) for k, t in load_times.items()}
+    amp = {k: 1.0 + (min(1.0, T1 / (np.pi * t)) if t > 0 else 1.0)
+           for k, t in load_times.items()}
     return QuasiStaticCheck(
         speeds=c,
         transit={"h/c_P": thickness / c["P"], "h/c_S": thickness / c["S"],
