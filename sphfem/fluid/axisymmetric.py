@@ -354,7 +354,7 @@ class AxisymmetricFluid:
     def __init__(self, x, v, rho, kind, M, vol, R, params: FluidParams,
                  kernel: str = "wendland_c2", periodic_z=None, planar: bool = False,
                  wall_z: float | None = None, adaptive_h: bool = False, wall_normals=None,
-                 smooth_hoop: bool = False):
+                 smooth_hoop: bool = True):
         self.x = np.array(x, dtype=np.float64)
         n = self.n = self.x.shape[0]
         self.v = np.array(v, dtype=np.float64).reshape(n, 2)
