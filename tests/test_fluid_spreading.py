@@ -167,3 +167,24 @@ def test_link_keeps_the_connected_sheet_and_area_diameter():
     # 2D: the wetted length
     xs = np.column_stack([(np.arange(7) + 0.5) * dx, np.full(7, 0.4 * dx)])
     assert sp.area_diameter(xs, 0.0, dx) == pytest.approx(7 * dx)
+
+
+def test_spreading_study_scenes_parse():
+    """examples/droplet_impact/spreading_study.py: every case is a valid scene with the
+    stated spacing and an end time 4 tc after contact (contact at R / v)."""
+    import importlib.util
+    from pathlib import Path
+
+    from sphfem.scene import parse_scene
+
+    path = Path(__file__).resolve().parents[1] / "examples" / "droplet_impact" / \
+        "spreading_study.py"
+    spec = importlib.util.spec_from_file_location("spreading_study", path)
+    study = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(study)
+    for name in study.CASES:
+        c = study.case_params(name)
+        sc = parse_scene(study.scene_dict(c), source=name)
+        assert sc.sph.dx == pytest.approx(study.D / c["n"])
+        tc = study.D / c["v"]
+        assert sc.time.t_end == pytest.approx(sc.support_radius / c["v"] + study.T_TC * tc)
