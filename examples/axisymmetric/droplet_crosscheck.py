@@ -9,6 +9,12 @@ surface a support radius R = 3 dx above the wall top z = 0; the wall is 3 layers
 particles.  Time t_c = D / v.  Recorded every 0.1 t_c: the spread diameter 2 max r over the
 fluid particles and the mass-weighted radius sqrt(sum m r^2 / sum m).
 
+Axisymmetric options (all on by default; flags turn them off): the Shepard-averaged hoop
+term v_r / r in the continuity (``--pointwise-hoop``: the particle's own, which blows up
+near the axis at ~0.9 t_c), the free-slip ghost velocity of the wall plane (normal e_z) in
+the continuity's divergence (``--no-wall-normals``: rings sink through the wall layers and
+the spread is 20-25 % short), h_i ~ sqrt(A_i) (``--fixed-h``).
+
     python examples/axisymmetric/droplet_crosscheck.py axi --dx 6.25e-6 --out axi.json
     python examples/axisymmetric/droplet_crosscheck.py 3d  --dx 6.25e-6 --out 3d.json
     python examples/axisymmetric/droplet_crosscheck.py compare axi.json 3d.json
@@ -79,8 +85,8 @@ def record(t, r, z, m, v, dx, p):
             float(np.sqrt((v * v).sum(axis=1)).max()) / V, z.min() / dx, p.min() / (RHO * V * V))
 
 
-def run_axi(dx, t_end_tc, half_width, smooth_hoop=True, wall_normals=False,
-            adaptive_h=False):
+def run_axi(dx, t_end_tc, half_width, smooth_hoop=True, wall_normals=True,
+            adaptive_h=True):
     from sphfem.fluid.axisymmetric import AxisymmetricFluid
     from sphfem.particles import FLUID, WALL
 
@@ -167,16 +173,17 @@ def main():
     ap.add_argument("--out")
     ap.add_argument("--pointwise-hoop", action="store_true",
                     help="axi: the hoop term v_r,i / r_i of the particle itself (old default)")
-    ap.add_argument("--wall-normals", action="store_true",
-                    help="axi: free-slip ghost velocity of the wall in the continuity")
-    ap.add_argument("--adaptive-h", action="store_true", help="axi: h_i ~ sqrt(A_i)")
+    ap.add_argument("--no-wall-normals", action="store_true",
+                    help="axi: the wall's own velocity in the continuity (not the free-slip "
+                         "ghost)")
+    ap.add_argument("--fixed-h", action="store_true", help="axi: h fixed (not ~ sqrt(A_i))")
     a = ap.parse_args()
     if a.mode == "compare":
         compare(*(json.load(open(f)) for f in a.files))
         return
     if a.mode == "axi":
-        res = run_axi(a.dx, a.tc, a.half_width, not a.pointwise_hoop, a.wall_normals,
-                      a.adaptive_h)
+        res = run_axi(a.dx, a.tc, a.half_width, not a.pointwise_hoop, not a.no_wall_normals,
+                      not a.fixed_h)
     else:
         res = run_3d(a.dx, a.tc, a.half_width)
     print(json.dumps({k: v for k, v in res.items() if k != "history"}))
