@@ -60,7 +60,10 @@ terms), ``wall_normals`` (the continuity's divergence sees the free-slip ghost o
 :meth:`_divergence_velocity`; with the wall's own velocity 0 the normal compression at the
 wall is underestimated and rings sink into the wall layers).  Status (issue 16): with all
 three the droplet impact follows the 3D run at equal spacing to within 3-13 % in spread
-diameter (examples/axisymmetric/droplet_crosscheck.py).  Also validated: hydrostatic column,
+diameter (examples/axisymmetric/droplet_crosscheck.py).  NOT yet robust: at D/dx = 32 the
+same run loses one ring at ~1.3 t_c (ejected at 18 V from the contact line, where rings
+sink up to 2.6 dx into the wall layers); wall penetration is the open problem.  Also
+validated: hydrostatic column,
 Hagen-Poiseuille start-up, prescribed-field kernel tests, a free drop flattened into a sheet;
 the planar mode equals the 2D :class:`~sphfem.fluid.wcsph.FluidSolver` to round-off.
 
