@@ -9,7 +9,8 @@ previous coupling time to ``t`` instead of solving K u = f.  The step dt = t - t
 whatever the driver's coupling interval is (the SPH step or k of them, varying); the
 effective matrix is refactorised only when dt changes (a few sizes are cached).  A second
 ``solve`` at the same t returns the last result without stepping.  The state at ``t0``
-(constructor) is rest under zero load, so the first coupling load acts as a step.
+(constructor) is rest: a first ``solve(t0)`` puts it in equilibrium under the load of
+that moment (the quasi-static solution, v = a = 0); later loads act from there.
 
 Registration.  Importing this module adds both names to
 :data:`coupling.backends.BACKENDS`.
@@ -38,6 +39,12 @@ class _DynamicMixin:
     def solve(self, t: float) -> CoupledResult:
         if self.last is not None and t == self.dyn.t:
             return self.last
+        if self.last is None and t == self.dyn.t:
+            # the first solve at the start time: the substrate is at rest in equilibrium
+            # under the load present then (K u0 = f0, v0 = a0 = 0), the quasi-static state
+            out = super().solve(t)
+            self.dyn.reset(u0=out.result.dofs, f0=out.result.load, t0=t)
+            return out
         dt = float(t) - self.dyn.t
         if not dt > 0:
             raise ValueError(f"{self.name}: coupling time {t} is not after the previous "

@@ -380,6 +380,19 @@ class CouplingModule(PhysicsModule):
         if cfg.backend == "fem":
             backend = FEMBackend(build_substrate(sc, cfg, lo, hi, T0), cfg.surface,
                                  cfg.temperature_map, R=ctx.R, kernel=ctx.kernel)
+        elif cfg.backend == "fem-dynamic":
+            from coupling.backend_fem_dynamic import DynamicFEMBackend
+
+            if ctx.t > 0.0:
+                raise ValueError('coupling.backend = "fem-dynamic" cannot resume from a '
+                                 "checkpoint: the substrate's velocity and acceleration are "
+                                 "not checkpointed; rerun from t = 0")
+
+            rho = sc.materials[cfg.material].rho0
+            backend = DynamicFEMBackend(build_substrate(sc, cfg, lo, hi, T0), rho,
+                                        cfg.surface, cfg.temperature_map, R=ctx.R,
+                                        kernel=ctx.kernel, hht_alpha=cfg.hht_alpha,
+                                        mass=cfg.mass, t0=float(ctx.t))
         else:
             backend = TLSPHBackend.from_scene(sc, cfg, reg)
         plane = getattr(backend, "surface_plane", None)
@@ -391,9 +404,10 @@ class CouplingModule(PhysicsModule):
         sensors = SensorSet(shapes, mats, surface=surface, depth=depth,
                             tol=region_sel.tol)
         probes = cfg.probes
-        if probes is None and plane is not None and cfg.backend == "fem":
+        fem = cfg.backend in ("fem", "fem-dynamic")
+        if probes is None and plane is not None and fem:
             probes = default_probes(backend.sub.mesh, plane, lo, hi)
-        if probes is not None and cfg.backend == "fem":
+        if probes is not None and fem:
             backend.sub.probe_matrix(np.asarray(probes, float))  # raises if outside the mesh
         self.driver = CouplingDriver(sensors, backend, probes, cfg.every_k_steps,
                                      cfg.vtu_every)

@@ -122,8 +122,18 @@ MESH = Section("mesh", (
        "`left`, `right` (, `front`, `back`).")
 
 COUPLING = Section("coupling", (
-    Param("backend", str, "fem", choices=("fem", "tlsph"),
-          doc="substrate model: quasi-static FEM (K factorised once) or the TL-SPH solid"),
+    Param("backend", str, "fem", choices=("fem", "fem-dynamic", "tlsph"),
+          doc="substrate model: quasi-static FEM (K factorised once), elastodynamic FEM "
+              "(HHT-alpha / Newmark, `sphfem.fem.elastodynamic`; for loading faster than "
+              "about 3 times the substrate's slowest mode 4 h / c_S, see "
+              "docs/validation/substrate_dynamics) or the TL-SPH solid"),
+    Param("hht_alpha", float, 0.0, ge=-1.0 / 3.0, le=0.0, when=("backend", ("fem-dynamic",)),
+          doc="HHT-alpha parameter of the elastodynamic substrate: 0 = Newmark average "
+              "acceleration (no numerical damping), down to -1/3 (damps the modes the mesh "
+              "does not resolve; second order)"),
+    Param("mass", str, "consistent", choices=("consistent", "lumped"),
+          when=("backend", ("fem-dynamic",)),
+          doc="mass matrix of the elastodynamic substrate (lumped: P1 only)"),
     Param("material", str, REQUIRED,
           doc="name of the `[materials.<name>]` table giving E, nu and alpha (alpha unset: "
               "no thermal strain)"),

@@ -79,7 +79,7 @@ def check_heat(rec, ctx, path, material, backend):
     if rec.model != "fem-contact":
         return
     core = ctx.core
-    if backend != "fem":
+    if backend not in ("fem", "fem-dynamic"):
         ctx.error(f"{path}.model", f'model = "fem-contact" needs coupling.backend = "fem", '
                                    f"got {backend!r}")
     mods = list(core["physics"].modules)
