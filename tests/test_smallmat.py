@@ -127,15 +127,20 @@ def test_renormalisation_falls_back_to_identity():
 
 def test_one_implementation_each():
     """FASTMATH is defined once (sphfem.kernels); the fluid passes, the operators and the
-    TL-SPH reference configuration use the shared kernels, not copies."""
+    TL-SPH reference configuration use the shared kernels, not copies (the fluid modules
+    import sphfem.smallmat; passes.py re-exports no private aliases)."""
     root = pathlib.Path(sphfem.__file__).parent
     defs = [p.relative_to(root).as_posix() for p in root.rglob("*.py")
             if re.search(r"^FASTMATH\s*=\s*\{", p.read_text(), re.M)]
     assert defs == ["kernels.py"]
     assert operators.FASTMATH is kernels.FASTMATH and passes.FASTMATH is kernels.FASTMATH
-    assert passes._sep is smallmat.pair_sep
-    assert passes._invert is smallmat.invert3
-    assert passes._invert_sym is smallmat.invert_sym3
+    assert passes.pair_sep is smallmat.pair_sep  # the fluid passes use the shared helpers
+    assert passes.invert_sym3 is smallmat.invert_sym3
+    for name in ("_sep", "_invert", "_invert_sym"):  # and re-export no private aliases
+        assert not hasattr(passes, name), name
+    for p in (root / "fluid").glob("*.py"):  # no copy of a small-matrix helper in the fluid
+        assert not re.search(r"^def (_sep|_invert|_invert_sym|pair_sep|invert3)\(",
+                             p.read_text(), re.M), p.name
     assert operators.invert_small is smallmat.invert_small
     for name in ("_pair", "_psep"):
         src = (root / "operators.py").read_text() + (root / "fluid/passes.py").read_text()

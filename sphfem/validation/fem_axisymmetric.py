@@ -251,8 +251,9 @@ def fem_axisymmetric(quick: bool) -> CaseResult:
         "radial": {"P1": (8, 16, 32, 64), "P2": (4, 8, 16, 32)},
         "mms": {"P1": (8, 16, 32, 64), "P2": (4, 8, 16, 32)},
     }
-    if quick:  # the two coarsest meshes of each
-        sizes = {k: {el: hs[:2] for el, hs in per.items()} for k, per in sizes.items()}
+    if quick:  # the two middle meshes of each (the two coarsest unstructured Lame meshes
+        # are pre-asymptotic: P2 order 2.6 on one gmsh mesh pair, 3.2 on another)
+        sizes = {k: {el: hs[1:3] for el, hs in per.items()} for k, per in sizes.items()}
     makers = {"lame": lame_run, "radial": radial_run, "mms": mms_run}
     for name, per in sizes.items():
         for el, hs in per.items():
