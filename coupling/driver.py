@@ -404,7 +404,7 @@ class CouplingModule(PhysicsModule):
         sensors = SensorSet(shapes, mats, surface=surface, depth=depth,
                             tol=region_sel.tol)
         probes = cfg.probes
-        fem = cfg.backend in ("fem", "fem-dynamic")
+        fem = isinstance(backend, FEMBackend)  # every FEM backend has a mesh to probe
         if probes is None and plane is not None and fem:
             probes = default_probes(backend.sub.mesh, plane, lo, hi)
         if probes is not None and fem:
