@@ -1,0 +1,66 @@
+"""Richardson extrapolation and observed order (sphfem.validation.richardson) on
+manufactured sequences f(h) = f0 + C h^p (+ a higher-order term)."""
+
+import math
+
+import pytest
+
+from sphfem.validation.richardson import observed_order, richardson
+
+
+@pytest.mark.parametrize("p", [1.0, 1.5, 2.0, 3.0])
+@pytest.mark.parametrize("hs", [(4.0, 2.0, 1.0), (10.0, 6.25, 3.125), (3.0, 2.0, 1.0)])
+def test_exact_power_law_recovers_order_and_limit(p, hs):
+    f0, C = 3.7, -0.8
+    f = [f0 + C * h**p for h in hs]
+    est = richardson(hs, f)
+    assert est.asymptotic
+    assert est.order == pytest.approx(p, rel=1e-9)
+    assert est.value == pytest.approx(f0, rel=1e-12)
+    # the GCI band around the finest value holds the exact limit (F_s = 1.25 > 1)
+    assert abs(est.finest - f0) <= est.error_bar
+    assert est.relative_error_finest == pytest.approx(abs(C) * hs[-1]**p / f0, rel=1e-9)
+
+
+def test_input_order_does_not_matter_and_four_levels_report_each_triple():
+    hs = [1.0, 8.0, 2.0, 4.0]
+    f = [2.0 + 0.5 * h**2 + 0.01 * h**3 for h in hs]
+    est = richardson(hs, f)
+    assert len(est.orders) == 2
+    # the higher-order term fades: the finer triple is closer to 2
+    assert abs(est.orders[1] - 2.0) < abs(est.orders[0] - 2.0)
+    assert abs(est.value - 2.0) < 0.05 * abs(est.finest - 2.0) + 1e-3
+
+
+def test_oscillatory_sequence_is_not_asymptotic_and_gets_spread_error_bar():
+    est = richardson([4, 2, 1], [1.0, 1.2, 1.1])
+    assert not est.asymptotic and est.order is None
+    assert est.value == 1.1
+    assert est.error_bar == pytest.approx(3.0 * 0.2)
+    assert "oscillatory" in est.note
+
+
+def test_diverging_sequence_is_flagged():
+    assert observed_order([4, 2, 1], [1.0, 1.1, 1.4]) is None
+    est = richardson([4, 2, 1], [1.0, 1.1, 1.4])
+    assert not est.asymptotic and "not converging" in est.note
+
+
+def test_converged_to_round_off():
+    est = richardson([4, 2, 1], [5.0, 5.0, 5.0])
+    assert est.asymptotic and est.error_bar == 0.0 and est.value == 5.0
+
+
+def test_within_uses_error_bar():
+    est = richardson([4, 2, 1], [1.0 + 0.1 * h for h in (4, 2, 1)])
+    assert est.within(1.05, 0.0)           # inside the error bar (finest 1.1, limit 1.0)
+    assert not est.within(1.3, 0.05)
+
+
+@pytest.mark.parametrize("bad, msg", [(([1, 2], [1, 2]), "at least 3"),
+                                      (([1, 2, 3], [1, 2]), "spacings but"),
+                                      (([1, 2, 3], [1, math.nan, 2]), "non-finite"),
+                                      (([1, 1, 2], [1, 2, 3]), "distinct")])
+def test_bad_input(bad, msg):
+    with pytest.raises(ValueError, match=msg):
+        richardson(*bad)
