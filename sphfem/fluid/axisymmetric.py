@@ -517,6 +517,10 @@ class AxisymmetricFluid:
         self.drho[:] = drho[:n]
         self.p[:] = p[:n]
         self.area = A[:n].copy()
+        #: the augmented state of this evaluation (real rows, then mirrors), for callers that
+        #: need pair sums of it (the wall forces of sphfem.axisymmetric_scene)
+        self.augmented = dict(x=x, v=v, vg=vg, rho=rho, p=p, A=A, mt=mt, mu=mu, kind=kind,
+                              Rp=Rp, nbrs=nl, src=src, mtype=mtype)
         #: sum_j A_j W_ij over all neighbours, self included (1 where the areas tile the
         #: plane; ~1/2 at a free surface)
         self.shepard = shep[:n].copy()
