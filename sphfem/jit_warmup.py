@@ -71,18 +71,9 @@ def coarsened(scene, coarsen: float = 3.0, steps: int = 100) -> dict:
     ``coarsen`` (``sph.dx``, per-block ``dx``, the ``h_*`` keys of module sub-tables such
     as ``[coupling.mesh]``, and a block's ``gap``, which must stay >= R) and at most
     ``steps`` steps."""
-    d = scene.to_dict()
-    d["sph"]["dx"] *= coarsen
-    for b in d["blocks"]:
-        for k in ("dx", "gap"):  # a gap is checked against R: it scales with it
-            if b.get(k) is not None:
-                b[k] *= coarsen
-    for name in scene.sections:
-        for sub in d[name].values():
-            if isinstance(sub, dict):
-                for k, v in sub.items():
-                    if k.startswith("h_") and isinstance(v, (int, float)) and v:
-                        sub[k] = v * coarsen
+    from sphfem.resolution import scaled_resolution
+
+    d = scaled_resolution(scene, coarsen)
     ms = d["time"].get("max_steps")
     d["time"]["max_steps"] = steps if ms is None else min(int(ms), steps)
     return d
