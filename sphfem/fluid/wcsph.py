@@ -36,8 +36,7 @@ from __future__ import annotations
 import logging
 import math
 import time
-from dataclasses import dataclass, field, make_dataclass
-from typing import Any
+from dataclasses import dataclass, field
 
 import numba
 import numpy as np
@@ -62,6 +61,7 @@ from sphfem.fluid.standalone import standalone_context
 from sphfem.neighbors import NeighborList
 from sphfem.particles import FLUID, WALL, ParticleSet
 from sphfem.physics import PhysicsModule, register_physics
+from sphfem.schema.params import check_declared, section_dataclass
 
 logger = logging.getLogger(__name__)
 
@@ -102,13 +102,6 @@ RUN_FIELDS = {
 }
 
 
-def _field_default(p):
-    """A ``[fluid]`` key's default as a :class:`FluidParams` default: a per-axis default
-    (a function of the dimension in the declaration) becomes (), padded with zeros by the
-    solver."""
-    return () if callable(p.default) else p.default
-
-
 def _check_params(self) -> None:
     """Check the values against the ``[fluid]`` declaration (bounds, choices, the method
     names of the registries) and the cross-key rules."""
@@ -117,14 +110,7 @@ def _check_params(self) -> None:
             raise ValueError(f"fluid {k} must be positive, got {getattr(self, k)}")
     if self.mu < 0 or self.skin < 0:
         raise ValueError("fluid mu and skin must be non-negative")
-    for q in FLUID_SECTION.params:
-        v = getattr(self, q.name)
-        if q.name in REGISTRIES:
-            REGISTRIES[q.name].lookup(v)  # ValueError for an unknown method
-        elif q.choices is not None and v not in q.choices:
-            raise ValueError(f"unknown fluid {q.name} {v!r}; known: {', '.join(q.choices)}")
-        elif q.type in (float, int) and v is not None and not q.in_range(v):
-            raise ValueError(f"fluid {q.name} must be {q.expectation()}, got {v!r}")
+    check_declared(self, FLUID_SECTION, "fluid", REGISTRIES)  # ValueError: unknown method
     lo, hi = self.rho_ratio_band
     if not 0 < lo < 1 < hi:
         raise ValueError(f"rho_ratio_band must satisfy 0 < lo < 1 < hi, got {(lo, hi)}")
@@ -137,32 +123,20 @@ def _check_params(self) -> None:
                              "[N/m] or its calibration constant")
 
 
-def _make_fluid_params():
-    """:class:`FluidParams`, a dataclass with one field per ``[fluid]`` key (name and default
-    from :data:`sphfem.fluid.scene_section.FLUID`), the :data:`RUN_FIELDS` and
-    ``st_params``."""
-    rows = [(k, d, doc) for k, (d, doc) in RUN_FIELDS.items()]
-    rows += [(q.name, _field_default(q), q.doc) for q in FLUID_SECTION.params]
-    fields = [(k, Any, field(default=d)) for k, d, _ in rows]
-    fields.append(("st_params", dict, field(default_factory=dict)))
-    doc = ("Parameters of the WCSPH fluid (SI units): the ``[fluid]`` keys of the scene "
-           "(declared in :mod:`sphfem.fluid.scene_section`, documented in docs/scenes.md) "
-           "and the materials' and run settings.\n\n"
-           + "\n".join(f"{k}: {doc}" for k, _, doc in rows)
-           + "\nst_params: the surface-tension method's own keys not declared above "
-             "(name -> value)")
-    cls = make_dataclass("FluidParams", fields, namespace={
-        "__doc__": doc,
+FluidParams = section_dataclass(
+    "FluidParams", FLUID_SECTION,
+    {**RUN_FIELDS, "st_params": (dict, "the surface-tension method's own keys not declared "
+                                       "in [fluid] (name -> value)")},
+    module=__name__,
+    doc="Parameters of the WCSPH fluid (SI units): the ``[fluid]`` keys of the scene "
+        "(declared in :mod:`sphfem.fluid.scene_section`, documented in docs/scenes.md) and "
+        "the materials' and run settings.",
+    namespace={
         "__post_init__": _check_params,
         "uses_free_surface": property(
             lambda self: self.detect_free_surface or self.shifting != "none",
             doc="the free surface is detected (flag or shifting)"),
     })
-    cls.__module__ = __name__
-    return cls
-
-
-FluidParams = _make_fluid_params()
 
 
 #: per-particle fields of the fluid (name -> (dtype, components or "dim"))
