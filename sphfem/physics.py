@@ -19,11 +19,19 @@ if TYPE_CHECKING:
 
 #: scene name -> "module.path:ClassName" (imported only when a scene names it)
 MODULES: dict[str, str] = {}
+#: (scene name, geometry) -> target: the class built instead of ``MODULES[name]`` in a
+#: scene whose ``[scene] geometry`` is not "cartesian" (e.g. "axisymmetric")
+GEOMETRY_MODULES: dict[tuple[str, str], str] = {}
 
 
-def register_physics(name: str, target: str) -> None:
-    """Register the physics module class at ``target`` ("pkg.mod:Class") as ``name``."""
-    MODULES[name] = target
+def register_physics(name: str, target: str, geometry: str = "cartesian") -> None:
+    """Register the physics module class at ``target`` ("pkg.mod:Class") as ``name``; with
+    ``geometry`` (a ``[scene] geometry`` value other than "cartesian") as the form of
+    ``name`` built in scenes of that geometry."""
+    if geometry == "cartesian":
+        MODULES[name] = target
+    else:
+        GEOMETRY_MODULES[(name, geometry)] = target
 
 
 class PhysicsModule:
@@ -88,11 +96,13 @@ class PhysicsModule:
 
 
 def build_modules(scene) -> list[PhysicsModule]:
-    """Instantiate the modules listed in ``scene.physics.modules``, in that order."""
+    """Instantiate the modules listed in ``scene.physics.modules``, in that order (in a
+    scene of another geometry its registered form, :data:`GEOMETRY_MODULES`)."""
     out = []
+    geometry = getattr(scene, "geometry", "cartesian")
     for name in scene.physics.modules:
         try:
-            target = MODULES[name]
+            target = GEOMETRY_MODULES.get((name, geometry)) or MODULES[name]
         except KeyError:
             raise KeyError(f"physics module {name!r} is not registered") from None
         mod_name, cls_name = target.split(":")

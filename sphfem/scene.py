@@ -64,6 +64,8 @@ __all__ = ["Scene", "SceneError", "load_scene", "parse_scene", "parse_scene_toml
 AXES = "xyz"
 BLOCK_KINDS = tuple(k for k in KIND_NAMES if k != "ghost")
 SHAPES = ("box", "sphere", "cylinder")
+#: values of ``[scene] geometry``
+GEOMETRIES = ("cartesian", "axisymmetric")
 #: a block estimated to need more particles than this is rejected (a typo in dx, usually)
 MAX_PARTICLES_PER_BLOCK = 1e8
 
@@ -93,6 +95,13 @@ def _check_block(rec, ctx, path):
 SCENE = Section("scene", (
     Param("name", str, None, doc="run name (default: the file name without .toml)"),
     Param("dim", int, REQUIRED, choices=(1, 2, 3), doc="spatial dimension"),
+    Param("geometry", str, "cartesian", choices=GEOMETRIES,
+          doc='"cartesian", or "axisymmetric": a body of revolution about the z axis, '
+              "dim = 2 with coordinates (r, z) (r >= 0: the domain's lo[0] is 0 and a block "
+              "may cross the axis, only its r >= 0 part is filled; lattice sampling); each "
+              "particle is a ring: `vol` = 2 pi r A and `m` = rho 2 pi r A (A = dx^2 its "
+              "meridian area); the listed modules take their axisymmetric forms "
+              "(sphfem.axisymmetric_scene)"),
     Param("description", str, "", doc="free text, echoed in summary.json"),
     Param("seed", int, 0, ge=0,
           doc="random seed (Poisson sampling of block i uses the stream (seed, i))"),
@@ -234,6 +243,7 @@ class Scene:
     time: Record
     output: Record
     sections: FrozenDict  # physics-module sections of the listed modules, by section name
+    geometry: str = "cartesian"  # or "axisymmetric": (r, z), particles are rings
 
     def __getattr__(self, name):
         if name.startswith("__"):
@@ -264,8 +274,8 @@ class Scene:
     def to_dict(self) -> dict:
         """Resolved scene (defaults filled, kelvin), JSON-serialisable; parse_scene() accepts it."""
         out = {
-            "scene": {"name": self.name, "dim": self.dim, "description": self.description,
-                      "seed": self.seed},
+            "scene": {"name": self.name, "dim": self.dim, "geometry": self.geometry,
+                      "description": self.description, "seed": self.seed},
             "domain": self.domain.to_dict(),
             "sph": self.sph.to_dict(),
             "materials": to_plain(self.materials),
@@ -345,6 +355,9 @@ def parse_scene(data, source: str = "<string>") -> Scene:
 
     meta = validate_section(SCENE, data.get("scene"), ctx)
     ctx.dim = meta.dim
+    ctx.geometry = meta.geometry
+    if meta.geometry == "axisymmetric" and meta.dim != 2:
+        ctx.error("scene.dim", f'geometry = "axisymmetric" needs dim = 2 (r, z), got {meta.dim}')
     rec = {name: validate_section(SECTIONS[name], data.get(name), ctx)
            for name in core if name != "scene"}
 
@@ -360,6 +373,8 @@ def parse_scene(data, source: str = "<string>") -> Scene:
         if m in modules[:i]:
             ctx.error(f"physics.modules[{i}]", f"module {m!r} is listed twice")
     rec["materials"] = resolve_sound_speeds(rec["materials"], ctx)  # c0 = "physical"
+    if meta.geometry == "axisymmetric":
+        _check_axisymmetric(rec, ctx)
     blocks = _resolve_blocks(rec["blocks"], rec["materials"], rec["domain"], rec["sph"], ctx)
     rec.update(resolve_times(rec, blocks, ctx))  # times in tc = D / |v|
     # module sections' check(rec, ctx, path) may cross-reference the core: ctx.core["blocks"]
@@ -380,8 +395,23 @@ def parse_scene(data, source: str = "<string>") -> Scene:
         source=source, name=name, dim=meta.dim, description=meta.description, seed=meta.seed,
         domain=rec["domain"], sph=rec["sph"], materials=rec["materials"], blocks=blocks,
         physics=rec["physics"], time=rec["time"], output=rec["output"],
-        sections=FrozenDict(sections),
+        sections=FrozenDict(sections), geometry=meta.geometry,
     )
+
+
+def _check_axisymmetric(rec, ctx) -> None:
+    """An axisymmetric scene: the domain starts at the axis (lo[0] = 0, r not periodic) and
+    every block is a lattice (a Poisson sample puts rings arbitrarily close to the axis)."""
+    dom = rec["domain"]
+    if dom.lo[0] != 0.0:
+        ctx.error("domain.lo", f'geometry = "axisymmetric": the domain starts at the axis, '
+                               f"lo[0] = 0 (r), got {dom.lo[0]:g}")
+    if dom.periodic[0]:
+        ctx.error("domain.periodic", 'geometry = "axisymmetric": r cannot be periodic')
+    for i, b in enumerate(rec["blocks"]):
+        if b.sampling != "lattice":
+            ctx.error(f"blocks[{i}].sampling", 'geometry = "axisymmetric" takes lattice '
+                                               f"blocks (rings off the axis), got {b.sampling!r}")
 
 
 def _default_name(source: str) -> str:
@@ -414,6 +444,8 @@ def _resolve_blocks(blocks, materials, domain, sph, ctx) -> tuple:
                         path)
         lo, hi = Shape.from_block(b, ctx.dim).bounds()
         tol = 1e-9 * max(h - l for l, h in zip(domain.lo, domain.hi, strict=True))
+        if getattr(ctx, "geometry", "cartesian") == "axisymmetric":
+            lo = (max(lo[0], 0.0), *lo[1:])  # only the part r >= 0 is filled
         for a in range(ctx.dim):
             if lo[a] < domain.lo[a] - tol or hi[a] > domain.hi[a] + tol:
                 ctx.error(path, f"block {b.name!r} ({b.shape}) extends outside the domain on "

@@ -116,7 +116,12 @@ class Simulation:
         self.period = np.where(scene.domain.periodic, self.hi - self.lo, 0.0)
         if particles is None:
             with stage("building particles"):
-                particles = build_particles(scene)
+                if getattr(scene, "geometry", "cartesian") == "axisymmetric":
+                    from sphfem.axisymmetric_scene import build_ring_particles
+
+                    particles = build_ring_particles(scene)  # rings: m, vol of the ring
+                else:
+                    particles = build_particles(scene)
         self.modules = build_modules(scene)
         for mod in self.modules:
             for name, (dtype, ncomp) in mod.fields().items():

@@ -34,11 +34,14 @@ from dataclasses import replace as _replace
 
 from sphfem.fluid.packing_section import PACKING
 from sphfem.fluid.scene_section import FLUID
+from sphfem.physics import register_physics
 from sphfem.schema import register_module
 
 # [fluid.packing] is declared next to the packing (sphfem.fluid.packing_section)
 register_module("fluid", _replace(FLUID, subsections=FLUID.subsections + (PACKING,)),
                 target="sphfem.fluid.wcsph:FluidModule")
+register_physics("fluid", "sphfem.axisymmetric_scene:AxisymmetricFluidModule",
+                 geometry="axisymmetric")
 
 __all__ = ["FluidModule", "FluidParams", "FluidSolver"]
 

@@ -11,6 +11,9 @@ nothing is compiled until it is used.
 """
 
 from sphfem.heat.scene_section import HEAT
+from sphfem.physics import register_physics
 from sphfem.schema import register_module
 
 register_module("heat", HEAT, target="sphfem.heat.module:HeatConduction")
+register_physics("heat", "sphfem.axisymmetric_scene:AxisymmetricHeatModule",
+                 geometry="axisymmetric")

@@ -1,0 +1,393 @@
+"""Axisymmetric scenes (``[scene] geometry = "axisymmetric"``): the fluid and heat modules.
+
+A scene with ``geometry = "axisymmetric"`` and ``dim = 2`` is a body of revolution about the
+z axis in the meridian half-plane (r, z), r >= 0 (:mod:`sphfem.axisymmetric`).  The driver
+is the ordinary one (:mod:`sphfem.simulation`); the geometry flag changes three things:
+
+* particles (:func:`build_ring_particles`): each lattice point of a block with r > 0 is a
+  ring of meridian area A = dx^2 (the block's spacing); its ``vol`` = 2 pi r A [m^3] and
+  ``m`` = rho0 2 pi r A [kg] (the ring mass; Petschek & Libersky 1993, Garcia-Senz &
+  Relano-Pastor 2012), so the summary's masses, the coupling's heat ledger and the
+  fem-contact interface (which take ``m`` and ``vol``) see the whole ring;
+* the registry (:func:`sphfem.physics.build_modules`) builds the axisymmetric class of a
+  module where one is registered for the geometry: ``fluid`` ->
+  :class:`AxisymmetricFluidModule`, ``heat`` -> :class:`AxisymmetricHeatModule`;
+* the ``coupling`` module takes ``backend = "fem-axisymmetric"``
+  (:mod:`coupling.axisymmetric_scene`).
+
+Both modules keep their own neighbour lists: the planar sums need the mirror particles
+across the axis (and the fluid's per-particle support radii), which the driver's list does
+not hold; they therefore set ``moves_particles = False`` (the driver neither rebuilds nor
+sorts its list; nothing reads it in such a scene).
+
+Fluid (:class:`AxisymmetricFluidModule`): :class:`sphfem.fluid.axisymmetric.AxisymmetricFluid`
+with the scene's wall particles as its Adami walls (free-slip ghost of the wall plane in the
+continuity, normals from the nearest face of each wall box; Shepard-averaged hoop term;
+h ~ sqrt(A) as in ``examples/axisymmetric/droplet_crosscheck.py``).  The force of the fluid
+on each wall particle (``f_fluid``, the coupling's sensors) is the ring force
+
+    F_w = - sum_i M_i a_(i<-w)                                                           (1)
+
+over the fluid rings i (and their axis mirrors, which carry the same ring mass) of the
+pressure, viscous and artificial-viscosity pair accelerations a_(i<-w) that wall particle w
+gives fluid i in the last force evaluation (the one of the step's velocity update); M_i the
+ring mass, so F_w is the total force on the ring of w [N] (the backend's "ring" convention)
+and sum_w F_w,z is the net axial force on the substrate, minus the rate of change of the
+fluid's axial momentum through the walls.
+
+Heat (:class:`AxisymmetricHeatModule`): eq. (1) of :mod:`sphfem.heat.axisymmetric`,
+
+    M_i c_i dT_i/dt = sum_j 2 pi A_i A_j k_ij (r_i + r_j) F_ij (T_j - T_i),
+
+Cleary's harmonic k_ij, over fluid and wall rings and the even axis ghosts, with
+A_i = m_i / (2 pi r_i rho_i); pairwise symmetric, so sum_i m_i c_i T_i is conserved to
+round-off (``energy_residual_J``).  Explicit Heun at ``[heat] cfl`` times the Gershgorin
+limit; the list is rebuilt every step (the fluid moves).
+"""
+
+from __future__ import annotations
+
+import logging
+import math
+import time
+
+import numpy as np
+from numba import njit, prange
+
+from sphfem import kernels
+from sphfem.neighbors import build_neighbor_list
+from sphfem.particles import FLUID, GHOST, WALL, ParticleSet
+from sphfem.physics import PhysicsModule
+
+logger = logging.getLogger(__name__)
+
+__all__ = ["AxisymmetricFluidModule", "AxisymmetricHeatModule", "build_ring_particles",
+           "ring_areas", "wall_ring_forces"]
+
+TWO_PI = 2.0 * math.pi
+
+
+def is_axisymmetric(scene) -> bool:
+    return getattr(scene, "geometry", "cartesian") == "axisymmetric"
+
+
+def build_ring_particles(scene) -> ParticleSet:
+    """The blocks of an axisymmetric ``scene`` as rings (module docstring): the lattice of
+    each block (:func:`sphfem.geometry.build_particles`), its points with r > 0, with
+    ``vol`` = 2 pi r dx_b^2 and ``m`` = rho0 ``vol`` (dx_b: the block's spacing)."""
+    from sphfem.geometry import block_points, build_particles
+
+    ps = build_particles(scene)
+    counts = [block_points(scene, i).shape[0] for i in range(len(scene.blocks))]
+    dx = np.repeat([b.dx if b.dx is not None else scene.sph.dx for b in scene.blocks],
+                   counts)
+    keep = ps.x[:, 0] > 0.0
+    out = ps.select(keep)
+    ring = TWO_PI * out.x[:, 0] * dx[keep] ** 2
+    out.vol[:] = ring
+    out.m[:] = out.rho * ring
+    return out
+
+
+def ring_areas(ps) -> np.ndarray:
+    """Meridian areas A = m / (2 pi r rho) [m^2] of the rings of ``ps``."""
+    return ps.m / (TWO_PI * ps.x[:, 0] * ps.rho)
+
+
+@njit(cache=True, parallel=True)
+def wall_ring_forces(x, v, vg, rho, p, mt, mu, kind, offsets, indices, Rp, s2, kcode, eps,
+                     alpha_c, out):
+    """Eq. (1) of the module docstring for the real WALL rows of the fluid's augmented set
+    (``kind`` WALL = real wall, fluid-like = FLUID or its mirrors, code 4): ``out[w]`` the
+    ring force [N] of wall w; the pair terms are those of
+    :func:`sphfem.fluid.axisymmetric.forces` seen from the fluid particle."""
+    for w in prange(x.shape[0]):
+        out[w, 0] = 0.0
+        out[w, 1] = 0.0
+        if kind[w] != WALL:
+            continue
+        f0 = 0.0
+        f1 = 0.0
+        for jj in range(offsets[w], offsets[w + 1]):
+            i = indices[jj]
+            if kind[i] != FLUID and kind[i] != 4:
+                continue
+            r0 = x[w, 0] - x[i, 0]  # x_j - x_i with j = the wall
+            r1 = x[w, 1] - x[i, 1]
+            d2 = r0 * r0 + r1 * r1
+            R = 0.5 * (Rp[i] + Rp[w])
+            if d2 >= R * R or d2 == 0.0:
+                continue
+            hij = 0.5 * R
+            d = math.sqrt(d2)
+            F = -s2 / (R * R * R) * kernels.kernel_dfdq(d / R, kcode) / d
+            ri = rho[i]
+            rw = rho[w]
+            mj = mt[w]
+            cp = -mj * (p[i] / (ri * ri) + p[w] / (rw * rw)) * F
+            rs = ri + rw
+            inv = 1.0 / ((d2 + eps * hij * hij) * rs * rs)
+            cv = 4.0 * (mu[i] + mu[i]) * mj * F * d2 * inv
+            u0 = vg[w, 0] - v[i, 0]
+            u1 = vg[w, 1] - v[i, 1]
+            cp += 2.0 * alpha_c * hij * mj * F * (u0 * r0 + u1 * r1) * rs * inv
+            M = TWO_PI * abs(x[i, 0]) * mt[i]
+            f0 -= M * (cp * r0 + cv * u0)
+            f1 -= M * (cp * r1 + cv * u1)
+        out[w, 0] = f0
+        out[w, 1] = f1
+
+
+def box_wall_normals(scene, x, kind) -> np.ndarray | None:
+    """Outward unit normals (n, 2) of the wall particles: the normal of the nearest face of
+    the wall box block holding the particle (faces on the axis r = 0 excluded); zero rows
+    for other kinds.  None when a wall particle lies in no box block."""
+    boxes = [(np.asarray(b.lo, float), np.asarray(b.hi, float)) for b in scene.blocks
+             if b.kind == "wall" and b.shape == "box"]
+    nrm = np.zeros_like(x)
+    w = np.flatnonzero(kind == WALL)
+    done = np.zeros(w.size, bool)
+    for lo, hi in boxes:
+        xs = x[w]
+        inside = np.all((xs >= lo - 1e-12) & (xs <= hi + 1e-12), axis=1) & ~done
+        if not inside.any():
+            continue
+        xs = xs[inside]
+        # distances to the faces: r = lo (not on the axis), r = hi, z = lo, z = hi
+        dist = np.column_stack([xs[:, 0] - lo[0] if lo[0] > 0 else np.full(len(xs), np.inf),
+                                hi[0] - xs[:, 0], xs[:, 1] - lo[1], hi[1] - xs[:, 1]])
+        face = np.argmin(dist, axis=1)
+        table = np.array([[-1.0, 0.0], [1.0, 0.0], [0.0, -1.0], [0.0, 1.0]])
+        nrm[w[inside]] = table[face]
+        done[inside] = True
+    return nrm if done.all() else None
+
+
+class AxisymmetricFluidModule(PhysicsModule):
+    """The ``fluid`` module of an axisymmetric scene (module docstring).
+
+    Parameters from ``[fluid]`` (:func:`sphfem.fluid.wcsph.params_from_scene`): rho0, c0,
+    gamma, mu, delta, alpha, gravity (g_r, g_z: g_r must be 0), cfl, eps_visc, cond_max.
+    Surface tension is not yet available in (r, z): a scene that names one is refused.
+    Writes ``x``, ``v``, ``rho``, ``p``, ``vol`` (= m / rho, ring volume) of the fluid and
+    ``f_fluid`` (ring forces, eq. 1) of the walls after every step.
+    """
+
+    name = "fluid"
+    moves_particles = False  # it moves the fluid, but with its own list (module docstring)
+
+    def __init__(self, scene):
+        from sphfem.fluid.wcsph import params_from_scene
+
+        super().__init__(scene)
+        self.params = params_from_scene(scene)
+        if self.params.surface_tension != "none":
+            raise ValueError(f'fluid: surface_tension = "{self.params.surface_tension}" is '
+                             'not available with geometry = "axisymmetric"; set "none"')
+        if abs(float(np.asarray(self.params.gravity, float).reshape(-1)[0])) > 0.0:
+            raise ValueError("fluid: an axisymmetric scene takes gravity along z only "
+                             "(gravity[0] = 0)")
+        self.solver = None
+        self.spread: list[list[float]] = []
+
+    def fields(self):
+        f = np.float64
+        return {"v": (f, 2), "p": (f, 1), "f_fluid": (f, 2)}
+
+    def init(self, ctx) -> None:
+        from sphfem.fluid.axisymmetric import AxisymmetricFluid
+
+        ps = ctx.particles
+        self.idx = idx = np.flatnonzero((ps.kind == FLUID) | (ps.kind == WALL))
+        kind = ps.kind[idx]
+        x = ps.x[idx]
+        A = ring_areas(ps)[idx]
+        nrm = box_wall_normals(self.scene, x, kind)
+        self.solver = AxisymmetricFluid(
+            x, ps.v[idx], ps.rho[idx], kind, np.where(kind == FLUID, ps.m[idx], 0.0), A,
+            ctx.R, self.params, kernel=self.scene.sph.kernel, adaptive_h=True,
+            wall_normals=nrm, smooth_hoop=True)
+        self.solver.t = ctx.t
+        self.solver.step_count = ctx.step
+        self.fl = kind == FLUID
+        walls = ps.x[ps.kind == WALL]
+        self.dx = float(self.scene.sph.dx)
+        self.wall_top = float(walls[:, 1].max()) + 0.5 * self.dx if len(walls) else None
+        self.D0 = 2.0 * max((b.radius for b in self.scene.blocks
+                             if b.kind == "fluid" and b.shape == "sphere"), default=0.0)
+        self.mom0 = self.momentum(ps)
+        self._write_back(ctx)
+
+    def _write_back(self, ctx) -> None:
+        s, ps, idx = self.solver, ctx.particles, self.idx
+        ps.x[idx] = s.x
+        ps.v[idx] = s.v
+        ps.rho[idx] = s.rho
+        ps.p[idx] = s.p
+        f = idx[self.fl]
+        ps.vol[f] = ps.m[f] / ps.rho[f]
+        aug = s.augmented
+        out = np.zeros((aug["x"].shape[0], 2))
+        nl = aug["nbrs"]
+        pa = s.params
+        wall_ring_forces(aug["x"], aug["v"], aug["vg"], aug["rho"], aug["p"], aug["mt"],
+                         aug["mu"], aug["kind"], nl.offsets, nl.indices, aug["Rp"], s.s2,
+                         s.kcode, pa.eps_visc, pa.alpha * pa.c0, out)
+        ps.f_fluid[idx] = out[: s.n]
+        ps.f_fluid[idx[self.fl]] = 0.0
+
+    def dt_limits(self, ctx) -> dict[str, float]:
+        return self.solver.dt_limits()
+
+    def step(self, ctx, dt: float) -> None:
+        from sphfem.errors import SimulationStopped
+
+        try:
+            self.solver.step(dt)
+        except FloatingPointError as e:
+            raise SimulationStopped(str(e)) from None
+        self._write_back(ctx)
+        if self.wall_top is not None and self.D0 > 0:
+            self.spread.append([ctx.t + dt, self.contact_diameter(ctx.particles)])
+
+    def contact_diameter(self, ps) -> float:
+        """2 max r + dx over the fluid rings within 1.5 dx above the wall top (the wetted
+        diameter of :mod:`sphfem.fluid.spreading`: a ring reaches dx/2 beyond its centre)."""
+        fl = ps.kind == FLUID
+        h = ps.x[fl, 1] - self.wall_top
+        near = (h >= -0.5 * self.dx) & (h < 1.5 * self.dx)
+        return float(2.0 * ps.x[fl][near, 0].max() + self.dx) if near.any() else 0.0
+
+    def momentum(self, ps) -> float:
+        """Axial momentum sum_i M_i v_z,i of the fluid rings [kg m/s]."""
+        fl = ps.kind == FLUID
+        return float(np.sum(ps.m[fl] * ps.v[fl, 1]))
+
+    def diagnostics(self, ctx) -> dict:
+        ps, s = ctx.particles, self.solver
+        fl = ps.kind == FLUID
+        sp = np.array(self.spread) if self.spread else np.zeros((0, 2))
+        # thin the history to ~400 rows for summary.json
+        keep = sp[:: max(1, len(sp) // 400)] if len(sp) else sp
+        d = {"geometry": "axisymmetric", "fluid_rings": int(fl.sum()),
+             "wall_rings": int((ps.kind == WALL).sum()),
+             "mass_kg": float(ps.m[fl].sum()),
+             "axial_momentum_kg_m_s": self.momentum(ps),
+             "axial_momentum_initial_kg_m_s": self.mom0,
+             "wall_s": dict(s.wall_s), "steps": s.step_count}
+        if self.D0 > 0 and len(sp):
+            k = int(np.argmax(sp[:, 1]))
+            d["spreading"] = {
+                "D0_m": self.D0, "definition": "2 max r + dx of the fluid rings within "
+                "1.5 dx above the wall top", "max_diameter_m": float(sp[k, 1]),
+                "max_ratio": float(sp[k, 1] / self.D0), "max_t_s": float(sp[k, 0]),
+                "history_t_s": keep[:, 0].tolist(),
+                "history_ratio": (keep[:, 1] / self.D0).tolist()}
+        return d
+
+
+class AxisymmetricHeatModule(PhysicsModule):
+    """The ``heat`` module of an axisymmetric scene (module docstring): conduction among
+    the fluid and wall rings with axis ghosts; c and k per material from the scene
+    (``k_heat`` is read every step, so the coupling's fem-contact model can set it to 0 on
+    the substrate).  ``[heat]``: ``laplacian = "cleary"`` and ``time_integration =
+    "explicit"`` only; ``cfl``; boundaries other than the axis are insulated (free)."""
+
+    name = "heat"
+    moves_particles = False
+
+    def __init__(self, scene):
+        super().__init__(scene)
+        cfg = scene.heat
+        if cfg is not None:
+            if cfg.laplacian != "cleary" or cfg.time_integration != "explicit":
+                raise ValueError('heat: geometry = "axisymmetric" takes laplacian = "cleary" '
+                                 'and time_integration = "explicit"')
+            if cfg.boundaries:
+                raise ValueError('heat: geometry = "axisymmetric" has no [[heat.boundaries]] '
+                                 "yet (every boundary but the axis is insulated)")
+        self.cfl = cfg.cfl if cfg is not None else 1.0
+        self.residual = 0.0
+        self.steps = 0
+        self.wall_s = 0.0
+        self._limit = math.inf
+
+    def fields(self):
+        f = np.float64
+        return {"T": (f, 1), "c_heat": (f, 1), "k_heat": (f, 1)}
+
+    def init(self, ctx) -> None:
+        ps = ctx.particles
+        for mid, (name, mat) in enumerate(ctx.materials.items()):
+            sel = ps.material == mid
+            if sel.any() and not (mat.c and mat.k is not None):
+                raise ValueError(f"heat: material {name!r} needs c and k")
+            ps.c_heat[sel] = mat.c or 0.0
+            ps.k_heat[sel] = mat.k or 0.0
+        self.kcode = kernels.kernel_code(ctx.kernel)
+        self.sigma = kernels.kernel_sigma(self.kcode, 2, ctx.R)
+        self.e0 = self.energy(ps)
+        self._rates(ctx, ps.T)
+
+    def energy(self, ps) -> float:
+        """sum_i m_i c_i T_i [J] over the real rings (the whole bodies of revolution)."""
+        real = ps.kind != GHOST
+        return float(np.sum(ps.m[real] * ps.c_heat[real] * ps.T[real]))
+
+    def _system(self, ctx):
+        from sphfem.heat.axisymmetric import axis_ghosts
+
+        ps = ctx.particles
+        real = np.flatnonzero(ps.kind != GHOST)
+        x = np.ascontiguousarray(ps.x[real])
+        g = axis_ghosts(x, ctx.R)
+        n = x.shape[0]
+        xa = np.ascontiguousarray(np.vstack([x, g.x]))
+        A = ring_areas(ps)[real]
+        kind = np.concatenate([np.full(n, FLUID, np.int8), np.full(g.n, GHOST, np.int8)])
+        keep = [0] * (GHOST + 1)
+        keep[FLUID] = (1 << FLUID) | (1 << GHOST)
+        lo = xa.min(axis=0) - ctx.R
+        hi = xa.max(axis=0) + ctx.R
+        nl = build_neighbor_list(xa, ctx.R, lo, hi, np.zeros(2), kind=kind, keep=tuple(keep))
+        k = ps.k_heat[real]
+        inv = 1.0 / (x[:, 0] * ps.rho[real] * ps.c_heat[real])
+        return dict(real=real, xa=xa, src=g.src, n=n, nl=nl,
+                    A=np.concatenate([A, A[g.src]]), k=np.concatenate([k, k[g.src]]),
+                    rc=np.concatenate([x[:, 0], g.r_cond]), inv=inv, mom=np.ones(n + g.n))
+
+    def _rates(self, ctx, T_all, sysd=None):
+        from sphfem.heat.axisymmetric import heat_rates
+
+        s = sysd if sysd is not None else self._system(ctx)
+        T = T_all[s["real"]]
+        Ta = np.concatenate([T, T[s["src"]]])
+        out = np.zeros(s["n"])
+        g = heat_rates(s["xa"], Ta, s["A"], s["k"], s["rc"], s["inv"], s["mom"], s["n"],
+                       s["nl"].offsets, s["nl"].indices, ctx.R, self.sigma, self.kcode,
+                       np.zeros(2), out)
+        self._limit = self.cfl * 2.0 / g if g > 0 else math.inf
+        return out, s
+
+    def dt_limits(self, ctx) -> dict[str, float]:
+        return {"thermal": self._limit} if math.isfinite(self._limit) else {}
+
+    def step(self, ctx, dt: float) -> None:
+        t0 = time.perf_counter()
+        ps = ctx.particles
+        e_before = self.energy(ps)
+        k1, s = self._rates(ctx, ps.T)
+        T1 = ps.T.copy()
+        T1[s["real"]] += dt * k1
+        k2, _ = self._rates(ctx, T1, s)
+        ps.T[s["real"]] += 0.5 * dt * (k1 + k2)
+        self.residual += self.energy(ps) - e_before
+        self.steps += 1
+        self.wall_s += time.perf_counter() - t0
+
+    def diagnostics(self, ctx) -> dict:
+        return {"geometry": "axisymmetric", "steps": self.steps,
+                "energy_J": self.energy(ctx.particles), "energy_initial_J": self.e0,
+                "energy_residual_J": self.residual,
+                "energy_residual_rel": self.residual / max(abs(self.e0), 1e-300),
+                "explicit_limit_s": self._limit, "wall_s": self.wall_s}
