@@ -166,16 +166,18 @@ class AxisymmetricCSF:
 
     After :meth:`accumulate`, ``state`` (a :class:`~sphfem.fluid.surface_tension_csf.CSFState`
     over the augmented rows) holds g, omega, kappa (= kappa_m + kappa_h) and kbar, and
-    ``kappa_m`` / ``kappa_h`` the two parts.
+    ``kappa_m`` / ``kappa_h`` the two parts.  ``hoop=False``: no hoop part (the planar CSF
+    with a symmetry plane at r = 0, for the planar mode of the fluid).
     """
 
     def __init__(self, sigma: float, kernel_code: int = kernels.WENDLAND_C2,
-                 axis_band=AXIS_BAND):
+                 axis_band=AXIS_BAND, hoop: bool = True):
         if not sigma >= 0.0:
             raise ValueError(f"surface tension sigma must be >= 0, got {sigma}")
         self.sigma = float(sigma)
         self.kernel_code = int(kernel_code)
         self.axis_band = tuple(float(a) for a in axis_band)
+        self.hoop = bool(hoop)
         self.state = None
         self.kappa_m = self.kappa_h = np.zeros(0)
 
@@ -198,7 +200,8 @@ class AxisymmetricCSF:
         self.kappa_m = st.kappa.copy()
         kh = np.zeros(m)
         a, b = self.axis_band
-        hoop_curvature(np.abs(x[:, 0]), st.g, st.omega, self.kappa_m, a * R, b * R, kh)
+        if self.hoop:
+            hoop_curvature(np.abs(x[:, 0]), st.g, st.omega, self.kappa_m, a * R, b * R, kh)
         self.kappa_h = kh
         st.kappa += kh
         mirror_scalar(n, src, st.kappa)
