@@ -81,7 +81,9 @@ import numpy as np
 from numba import njit, prange
 
 from sphfem import kernels
+from sphfem.fluid.axisymmetric_surface_tension import AxisymmetricCSF
 from sphfem.fluid.eos import tait_B, tait_density, tait_pressure
+from sphfem.fluid.no_penetration import NoPenetration
 from sphfem.fluid.wcsph import FluidParams
 from sphfem.neighbors import build_neighbor_list, min_image
 from sphfem.particles import FLUID, WALL
@@ -358,12 +360,16 @@ class AxisymmetricFluid:
     ``planar=True``: plain 2D SPH in the (x, y) = (r, z) plane with a symmetry plane at
     x = 0 (the same mirrors), ``M`` then the planar masses [kg/m]: no hoop terms, A = M / rho
     (for cross-checks against :class:`~sphfem.fluid.wcsph.FluidSolver` in 2D).
+
+    ``surface_tension``: sigma [N/m] of the CSF force with the hoop curvature
+    (:mod:`sphfem.fluid.axisymmetric_surface_tension`); 0: off.
     """
 
     def __init__(self, x, v, rho, kind, M, vol, R, params: FluidParams,
                  kernel: str = "wendland_c2", periodic_z=None, planar: bool = False,
                  wall_z: float | None = None, adaptive_h: bool = False, wall_normals=None,
-                 smooth_hoop: bool = True):
+                 smooth_hoop: bool = True, surface_tension: float = 0.0,
+                 no_penetration: bool = True):
         self.x = np.array(x, dtype=np.float64)
         n = self.n = self.x.shape[0]
         self.v = np.array(v, dtype=np.float64).reshape(n, 2)
@@ -400,8 +406,18 @@ class AxisymmetricFluid:
         self.wall_s = {"neighbors": 0.0, "forces": 0.0}
         self.adaptive_h = bool(adaptive_h)
         self.smooth_hoop = bool(smooth_hoop)
+        self.csf = (AxisymmetricCSF(surface_tension, self.kcode, hoop=not self.planar)
+                    if surface_tension > 0.0 else None)
         self.wall_normals = None if wall_normals is None else np.asarray(
             wall_normals, float).reshape(n, 2)
+        #: the kinematic wall condition on the position update (needs ``wall_normals``)
+        self.no_penetration = None
+        wl = self.kind == WALL
+        if no_penetration and self.wall_normals is not None and wl.any():
+            self.no_penetration = NoPenetration(self.x[wl], self.wall_normals[wl],
+                                                self.vol[wl])
+        #: fluid particles put back on the wall surface (count over all position updates)
+        self.penetration_corrections = 0
         #: reference meridian area a_ref: R_i = R sqrt(A_i / a_ref) (adaptive_h)
         self.a_ref = float(np.median(self._areas()[self.fluid])) if self.fluid.any() else 1.0
         self.Rp = np.full(n, self.R)
@@ -513,6 +529,9 @@ class AxisymmetricFluid:
                self.s2, self.kcode, self.Lz, self.gravity, pa.eps_visc, pa.delta * pa.c0,
                pa.alpha * pa.c0,
                0.0 if self.planar else 1.0, Bm, qh, acc, drho)
+        if self.csf is not None:  # CSF with the fluid's median support radius
+            self.csf.accumulate(x, A, rho, kind, nl.offsets, nl.indices, n, src, mtype,
+                                float(np.median(Rp[:n][self.fluid])), self.Lz, acc)
         self.acc[:] = acc[:n]
         self.drho[:] = drho[:n]
         self.p[:] = p[:n]
@@ -589,6 +608,8 @@ class AxisymmetricFluid:
                                      f"{self.step_count}, t = {self.t:.4g} s")
 
     def _reflect(self) -> None:
+        """Reflect the fluid at the axis and the wall plane, wrap periodic z, and hold it
+        out of particle walls with normals (:mod:`sphfem.fluid.no_penetration`)."""
         neg = self.fluid & (self.x[:, 0] < 0.0)
         self.x[neg, 0] *= -1.0
         self.v[neg, 0] *= -1.0
@@ -598,6 +619,12 @@ class AxisymmetricFluid:
             self.v[below, 1] *= -1.0
         if self.Lz:
             self.x[:, 1] = self.z0 + np.mod(self.x[:, 1] - self.z0, self.Lz)
+        if self.no_penetration is not None:
+            fl = self.fluid
+            xs, vs = self.x[fl], self.v[fl]
+            if self.no_penetration.apply(xs, vs):
+                self.penetration_corrections += 1
+                self.x[fl], self.v[fl] = xs, vs
 
     def run(self, t_end: float, callback=None, every: float | None = None) -> int:
         """Step to ``t_end`` with the stable step, ``callback(self)`` every ``every`` s."""
