@@ -266,6 +266,8 @@ class SubstrateHeat:
     def exchange(self, ps, t: float) -> None:
         """One coupling step ending at ``t``: exchange over t - (the previous call's t)
         (nothing on the first call) and record the figures."""
+        from coupling.heat_interface import step_mean_inv_sqrt
+
         f = self._fluid(ps)
         if self.fluid_e0 is None:
             self.fluid_e0 = float(np.sum(ps.m[f] * ps.c_heat[f] * ps.T[f]))
@@ -280,9 +282,9 @@ class SubstrateHeat:
         self.t_last = t
         itf = self.itf
         wet = ~np.isnan(itf.t_wet)
-        tw = (itf.t - dt) - itf.t_wet[wet]
-        self.q_ideal += float(np.sum(itf.sub.surface_area[wet] * 2.0 * self._C
-                                     * (np.sqrt(tw + dt) - np.sqrt(tw))))
+        tw = (itf.t - dt) - itf.t_wet[wet]  # < 0: wetted inside the step
+        self.q_ideal += float(np.sum(itf.sub.surface_area[wet] * self._C * dt
+                                     * step_mean_inv_sqrt(tw, dt)))
         # wall-layer particles whose footprint lies off the heat mesh exchange nothing
         z = x[:, -1] - itf.level
         lat = x[:, :-1]
