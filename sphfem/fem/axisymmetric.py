@@ -445,10 +445,5 @@ class AxisymmetricFEMSubstrate(FEMSubstrate):
         return super().point_force_load(
             points, per_radian(points, forces, self.force_convention), snap=snap)
 
-    def solve(self, dT_nodal=None, tractions=None, point_forces=None, body_force=None,
-              T_nodal=None, snap: str | None = "top", load=None) -> AxisymmetricResult:
-        """As :meth:`sphfem.fem.FEMSubstrate.solve`; tractions (t_r, t_z), point forces per
-        ``force_convention``, ``load`` a ready per-radian nodal vector."""
-        r = super().solve(dT_nodal=dT_nodal, tractions=tractions, point_forces=point_forces,
-                          body_force=body_force, T_nodal=T_nodal, snap=snap, load=load)
-        return AxisymmetricResult(self, r.dofs, r.load, r.dT_spec, r.info)
+    def _result(self, u, f, dT, info) -> AxisymmetricResult:
+        return AxisymmetricResult(self, u, f, dT, info)

@@ -52,6 +52,7 @@ from skfem import (
 from sphfem.fem import forms
 from sphfem.loads import scalar_at, temperature_change
 from sphfem.progress import stage
+from sphfem.quasistatic import QuasiStaticSubstrate
 
 logger = logging.getLogger(__name__)
 
@@ -255,8 +256,10 @@ class FEMResult:
                 "dT": dT}
 
 
-class FEMSubstrate:
+class FEMSubstrate(QuasiStaticSubstrate):
     """Linear thermo-elastic quasi-static substrate; K assembled and factorised once.
+    ``solve(dT_nodal, tractions, point_forces, body_force, T_nodal, snap, load)``
+    (:meth:`sphfem.quasistatic.QuasiStaticSubstrate.solve`) back-substitutes each step.
 
     Parameters
     ----------
@@ -566,9 +569,14 @@ class FEMSubstrate:
         """(f, dT): the nodal load vector of :meth:`solve`'s loads and the temperature change
         as given (also the elastodynamic substrate's load, sphfem.fem.elastodynamic)."""
         dT_nodal = temperature_change(dT_nodal, T_nodal, self.T0)
+        return self._assemble(dT_nodal, tractions, point_forces, body_force, snap,
+                              load), dT_nodal
+
+    def _assemble(self, dT, tractions, point_forces, body_force, snap, load) -> np.ndarray:
+        """The nodal load vector f of a step's loads (:meth:`solve`)."""
         f = self.basis.zeros()
-        if dT_nodal is not None:
-            f += self.thermal_load(dT_nodal)
+        if dT is not None:
+            f += self.thermal_load(dT)
         if tractions:
             f += self.traction_load(tractions)
         if point_forces is not None:
@@ -577,26 +585,12 @@ class FEMSubstrate:
             f += self.body_force_load(body_force)
         if load is not None:
             f += np.asarray(load, dtype=float)
-        return f, dT_nodal
+        return f
 
-    def solve(self, dT_nodal=None, tractions=None, point_forces=None, body_force=None,
-              T_nodal=None, snap: str | None = "top", load=None) -> FEMResult:
-        """Solve K u = f for this step's loads (K is not refactorised).
-
-        dT_nodal : temperature change: scalar, vertex array, scalar-dof array or callable.
-        T_nodal : absolute temperature instead (dT = T - T0).
-        tractions : ``{group: t}``, t constant (dim,) or callable of x [Pa].
-        point_forces : ``(points, forces)``, each (n, dim) [m, N]; points are snapped onto
-            the facet group ``snap`` (None: used as given).
-        body_force : constant (dim,) or callable of x [N/m^3].
-        load : a ready nodal load vector (e.g. a coupling transfer's P^T F), added as is.
-        """
-        t0 = time.perf_counter()
-        f, dT_nodal = self.load_vector(dT_nodal, tractions, point_forces, body_force, T_nodal,
-                                       snap, load)
-        t1 = time.perf_counter()
+    def _respond(self, f: np.ndarray, info: dict) -> np.ndarray:
+        """u with K_II u_I = f_I, u_D = 0: back-substitution (direct) or CG warm-started
+        from the previous solution (cg-amg; ``info["cg_iterations"]``)."""
         u = self.basis.zeros()
-        info = {"assemble_load_s": t1 - t0}
         if self.solver == "direct":
             u[self.I] = self._backsolve(f[self.I])
         else:
@@ -617,10 +611,11 @@ class FEMSubstrate:
             u[self.I] = x
             info["cg_iterations"] = its[0]
             self.cg_iterations.append(its[0])
-        info["solve_s"] = time.perf_counter() - t1
         self._u_prev = u
-        self.n_solves += 1
-        return FEMResult(self, u, f, dT_nodal, info)
+        return u
+
+    def _result(self, u, f, dT, info) -> FEMResult:
+        return FEMResult(self, u, f, dT, info)
 
     # ------------------------------------------------------------------ projection
     def project_tensor(self, Sq: np.ndarray) -> np.ndarray:

@@ -40,7 +40,8 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from sphfem import kernels
-from sphfem.loads import at_points, scalar_at, temperature_change
+from sphfem.loads import at_points, scalar_at
+from sphfem.quasistatic import QuasiStaticSubstrate
 from sphfem.solid.body import SolidBody, _components
 from sphfem.solid.constitutive import lame
 from sphfem.solid.integrate import relax
@@ -140,9 +141,12 @@ class TLSPHResult:
         return {"u": out_u, "stress": out_s, "von_mises": von_mises(out_s), "dT": out_t}
 
 
-class TLSPHSubstrate:
+class TLSPHSubstrate(QuasiStaticSubstrate):
     """Quasi-static thermo-elastic TL-SPH substrate on the box [lo, hi] (see the module
-    docstring).  ``rho`` only scales the fictitious dynamics of the relaxation."""
+    docstring).  ``rho`` only scales the fictitious dynamics of the relaxation.
+    ``solve(dT_nodal, tractions, point_forces, body_force, T_nodal, snap)``
+    (:meth:`sphfem.quasistatic.QuasiStaticSubstrate.solve`) relaxes to each step's
+    state; ``body_force`` [N/m^dim] acts as b V on every body particle."""
 
     def __init__(self, lo, hi, dx: float, E: float, nu: float, alpha: float,
                  T0: float = 293.15, rho: float = 1000.0, clamps=(), rollers=None,
@@ -267,23 +271,25 @@ class TLSPHSubstrate:
             _, k = cKDTree(Xall[cand]).query(pts)
             np.add.at(b.f_ext, cand[k], F)
 
-    # -- solve ---------------------------------------------------------------------------
-    def solve(self, dT_nodal=None, tractions=None, point_forces=None, T_nodal=None,
-              snap: str | None = "top", body_force=None) -> TLSPHResult:
-        """Quasi-static response to this step's loads (relaxation warm-started from the
-        previous state).  ``body_force``: constant (dim,) or callable of the reference
-        coordinates (dim, n) [N/m^dim], applied as b V on every body particle."""
-        t0 = time.perf_counter()
-        dT_nodal = temperature_change(dT_nodal, T_nodal, self.T0)
-        self._set_loads(dT_nodal, tractions, point_forces, snap, body_force)
-        info = relax(self.body, tol=self.tol, max_steps=self.max_steps)
-        self.body.internal_forces()
-        sig = self.body.cauchy()[self.inside]
-        self.n_solves += 1
+    # -- solve (sphfem.quasistatic.QuasiStaticSubstrate.solve) -------------------------
+    def _assemble(self, dT, tractions, point_forces, body_force, snap, load) -> None:
+        """Put the step's loads on the body (external forces, temperatures)."""
+        if load is not None:
+            raise ValueError("TLSPHSubstrate.solve: a ready nodal load vector is for the FEM "
+                             "substrate; give point_forces, tractions or body_force")
+        self._set_loads(dT, tractions, point_forces, snap, body_force)
+
+    def _respond(self, loads, info: dict) -> np.ndarray:
+        """Relax to the quasi-static state (warm-started from the previous one); the
+        Cauchy stress of the body particles.  ``info``: the relaxation's figures."""
+        info.update(relax(self.body, tol=self.tol, max_steps=self.max_steps))
         self.relax_steps.append(info["steps"])
-        info["solve_s"] = time.perf_counter() - t0
+        self.body.internal_forces()
+        return self.body.cauchy()[self.inside]
+
+    def _result(self, stress, loads, dT, info) -> TLSPHResult:
         b = self.body
-        return TLSPHResult(self, b.u[self.inside].copy(), sig,
+        return TLSPHResult(self, b.u[self.inside].copy(), stress,
                            b.theta[self.inside] - self.T0, info)
 
     def diagnostics(self) -> dict:
