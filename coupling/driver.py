@@ -393,6 +393,10 @@ class CouplingModule(PhysicsModule):
                                         cfg.surface, cfg.temperature_map, R=ctx.R,
                                         kernel=ctx.kernel, hht_alpha=cfg.hht_alpha,
                                         mass=cfg.mass, t0=float(ctx.t))
+        elif cfg.backend == "fem-axisymmetric":
+            from coupling.axisymmetric_scene import build_axisymmetric_backend
+
+            backend = build_axisymmetric_backend(sc, cfg, lo, hi, T0, ctx)
         else:
             backend = TLSPHBackend.from_scene(sc, cfg, reg)
         plane = getattr(backend, "surface_plane", None)
@@ -406,7 +410,9 @@ class CouplingModule(PhysicsModule):
         probes = cfg.probes
         fem = isinstance(backend, FEMBackend)  # every FEM backend has a mesh to probe
         if probes is None and plane is not None and fem:
-            probes = default_probes(backend.sub.mesh, plane, lo, hi)
+            # under the centre of the coupled surface (axisymmetric: on the axis, r = 0)
+            plo = np.r_[-hi[0], lo[1:]] if getattr(backend, "axisymmetric", False) else lo
+            probes = default_probes(backend.sub.mesh, plane, plo, hi)
         if probes is not None and fem:
             backend.sub.probe_matrix(np.asarray(probes, float))  # raises if outside the mesh
         self.driver = CouplingDriver(sensors, backend, probes, cfg.every_k_steps,

@@ -95,6 +95,10 @@ def _check(rec, ctx, path):
                                             f"{mesh.cells!r}")
     if ctx.dim == 1:
         ctx.error(path, "the coupled substrate needs a 2D (plane strain) or 3D scene")
+    axi = getattr(core.get("scene"), "geometry", "cartesian") == "axisymmetric"
+    if axi != (rec.backend == "fem-axisymmetric"):
+        ctx.error(f"{path}.backend", 'backend = "fem-axisymmetric" goes with [scene] geometry '
+                                     f'= "axisymmetric" and only with it; got {rec.backend!r}')
     check_heat(rec["heat"], ctx, f"{path}.heat", rec.material, rec.backend)
 
 
@@ -122,11 +126,13 @@ MESH = Section("mesh", (
        "`left`, `right` (, `front`, `back`).")
 
 COUPLING = Section("coupling", (
-    Param("backend", str, "fem", choices=("fem", "fem-dynamic", "tlsph"),
+    Param("backend", str, "fem", choices=("fem", "fem-dynamic", "tlsph", "fem-axisymmetric"),
           doc="substrate model: quasi-static FEM (K factorised once), elastodynamic FEM "
               "(HHT-alpha / Newmark, `sphfem.fem.elastodynamic`; for loading faster than "
               "about 3 times the substrate's slowest mode 4 h / c_S, see "
-              "docs/validation/substrate_dynamics) or the TL-SPH solid"),
+              "docs/validation/substrate_dynamics), the TL-SPH solid, or the quasi-static "
+              'axisymmetric FEM of a `geometry = "axisymmetric"` scene (its only backend; '
+              "(r, z) mesh, hoop stress, ring forces: coupling.axisymmetric_scene)"),
     Param("hht_alpha", float, 0.0, ge=-1.0 / 3.0, le=0.0, when=("backend", ("fem-dynamic",)),
           doc="HHT-alpha parameter of the elastodynamic substrate: 0 = Newmark average "
               "acceleration (no numerical damping), down to -1/3 (damps the modes the mesh "
