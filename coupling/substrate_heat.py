@@ -37,9 +37,9 @@ under-predicts both the contact temperature and the heat (validation case ``cont
    node from the time it was wetted: A_a 2 C (sqrt(t_w + dt) - sqrt(t_w)) per wetted step).
 
 Axisymmetric runs: the same code takes ring volumes 2 pi r A and full-ring masses of an
-axisymmetric SPH fluid (``vol`` and ``m`` as stored on its particles); the scene path is 2D
-planar and 3D until the axisymmetric fluid joins the scene (the interface and the FEM heat
-are tested with ring weights in the ``contact-heat`` validation case).
+axisymmetric SPH fluid (``vol`` and ``m`` as stored on its particles): a scene with
+``[scene] geometry = "axisymmetric"`` (sphfem.axisymmetric_scene) gets an axisymmetric heat
+mesh (2 pi r-weighted forms) and the impact point on the axis.
 """
 
 from __future__ import annotations
@@ -79,7 +79,7 @@ def check_heat(rec, ctx, path, material, backend):
     if rec.model != "fem-contact":
         return
     core = ctx.core
-    if backend not in ("fem", "fem-dynamic"):
+    if backend not in ("fem", "fem-dynamic", "fem-axisymmetric"):
         ctx.error(f"{path}.model", f'model = "fem-contact" needs coupling.backend = "fem", '
                                    f"got {backend!r}")
     mods = list(core["physics"].modules)
@@ -184,12 +184,13 @@ def build_substrate_heat(scene, cfg, ctx, region):
     top = float(region.hi[-1])
     prm = heat_defaults(hcfg, dim, scene.sph.dx, scene.time.t_end, sol.k, sol.rho0, sol.c,
                         region.lo, region.hi)
+    axi = getattr(scene, "geometry", "cartesian") == "axisymmetric"  # (r, z), rings
     mesh = graded_mesh(prm["lateral"], prm["depth"], prm["h_surface"], prm["growth"],
-                       h_lateral=prm["h_lateral"])
+                       h_lateral=prm["h_lateral"], axisymmetric=axi)
     if top != 0.0:
         mesh = mesh.translated([0.0] * (dim - 1) + [top])
     heat = TransientHeat(mesh, sol.k, sol.rho0, sol.c, region.T0, theta=1.0,
-                         robin_tol=hcfg.robin_tol)
+                         robin_tol=hcfg.robin_tol, axisymmetric=axi)
     period = np.asarray(ctx.period, float).copy()
     itf = ContactHeatInterface(heat, flu.k, flu.rho0, flu.c, axis=dim - 1, level=top,
                                side=1, wet_fraction=hcfg.wet_fraction, period=period,
@@ -202,6 +203,8 @@ def build_substrate_heat(scene, cfg, ctx, region):
               if fl.any() else 0.5 * (region.lo + region.hi))
     impact = np.array(centre, float)
     impact[-1] = top
+    if axi:
+        impact[0] = 0.0  # the impact point is on the axis
     sh = SubstrateHeat(heat, itf, dx=scene.sph.dx, T_fluid=T_f,
                        fluid=(flu.k, flu.rho0, flu.c), impact_point=impact, params=prm)
     sh.disconnect_wall_conduction(ctx, scene.material_index(cfg.material))
