@@ -278,3 +278,30 @@ def test_wall_ghost_in_continuity(normals):
         assert np.abs(f.drho[:nf][near]).max() < 0.075 * 2
     else:
         assert np.abs(f.drho[:nf][near]).max() > 0.15 * 2  # the deficit the ghost removes
+
+
+def test_no_penetration_distance_and_projection():
+    """NoPenetration on a flat wall of 3 layers (spacing s, top face z = 0) and a vertical
+    wall (face r = 1): the signed distance is the height above the top face (or the gap to
+    the vertical face), exact to round-off; points below are put on the face with the inward
+    normal velocity removed and the tangential one kept; points above are untouched."""
+    from sphfem.fluid.no_penetration import NoPenetration
+
+    s = 0.1
+    g = (np.arange(12) + 0.5) * s
+    xb = np.column_stack([np.repeat(g, 3), np.tile(-(np.arange(3) + 0.5) * s, 12)])
+    xv = np.column_stack([np.full(8, 1.0 + 0.5 * s), (np.arange(8) + 0.5) * s])
+    xw = np.vstack([xb, xv])
+    nw = np.vstack([np.tile([0.0, 1.0], (len(xb), 1)), np.tile([-1.0, 0.0], (len(xv), 1))])
+    wall = NoPenetration(xw, nw, s * s)
+    x = np.array([[0.33, 0.2], [0.41, -0.07], [0.52, -0.24], [0.97, 0.45], [1.03, 0.55]])
+    phi, nrm = wall.distance(x)
+    assert np.allclose(phi, [0.2, -0.07, -0.24, 0.03, -0.03], atol=1e-14)
+    assert np.allclose(nrm[:3], [0.0, 1.0]) and np.allclose(nrm[3:], [-1.0, 0.0])
+    v = np.array([[0.0, -1.0], [2.0, -1.0], [-1.0, 3.0], [1.0, 0.0], [1.0, 1.0]])
+    x1, v1 = x.copy(), v.copy()
+    assert wall.apply(x1, v1) == 3
+    assert np.allclose(x1[[0, 3]], x[[0, 3]]) and np.allclose(v1[[0, 3]], v[[0, 3]])
+    assert np.allclose(x1[1], [0.41, 0.0]) and np.allclose(v1[1], [2.0, 0.0])
+    assert np.allclose(x1[2], [0.52, 0.0]) and np.allclose(v1[2], [-1.0, 3.0])  # moving out
+    assert np.allclose(x1[4], [1.0, 0.55]) and np.allclose(v1[4], [0.0, 1.0])
