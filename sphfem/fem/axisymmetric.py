@@ -47,16 +47,12 @@ vertex is pinned in z (``pin_rigid``).  ``K`` is assembled and factorised once.
 from __future__ import annotations
 
 import logging
-import os
-import time
-from pathlib import Path
 
 import numpy as np
-from skfem import Basis, BilinearForm, ElementVector, LinearForm, MeshQuad1, MeshTri1
+from skfem import BilinearForm, LinearForm, MeshQuad1, MeshTri1
 
 from sphfem.fem import forms
-from sphfem.fem.substrate import _ELEMENTS, FEMResult, FEMSubstrate, load_mesh
-from sphfem.progress import stage
+from sphfem.fem.substrate import FEMResult, FEMSubstrate
 
 logger = logging.getLogger(__name__)
 
@@ -309,94 +305,54 @@ class AxisymmetricFEMSubstrate(FEMSubstrate):
     ``rdx``: the per-radian volume weights r dx there (for r-weighted norms and averages).
     """
 
+    solvers = ("direct",)
+    stiffness_form = staticmethod(axisymmetric_elasticity)
+    thermal_form = staticmethod(axisymmetric_thermal_load)
+    traction_form = staticmethod(axisymmetric_traction_load)
+    body_force_form = staticmethod(axisymmetric_body_force_load)
+
     def __init__(self, mesh, E: float, nu: float, alpha: float, T0: float = 293.15,
                  element: str = "P1", clamps=(), rollers=None, solver: str = "direct",
                  pin_rigid: bool | None = None, force_convention: str = "ring",
                  intorder: int | None = None, nthreads: int | None = None,
                  direct_backend: str = "auto"):
-        t0 = time.perf_counter()
-        self.timings: dict[str, float] = {}
-        if isinstance(mesh, (str, os.PathLike)):
-            self.mesh_path = Path(mesh)
-            mesh = load_mesh(mesh)
-        else:
-            self.mesh_path = None
-        if not isinstance(mesh, (MeshTri1, MeshQuad1)):
-            raise ValueError(f"axisymmetric substrate: need a 2D (r, z) mesh of triangles or "
-                             f"quadrilaterals, got {type(mesh).__name__}")
-        if element not in ("P1", "P2"):
-            raise ValueError(f"element must be 'P1' or 'P2', got {element!r}")
-        if solver != "direct":
-            raise ValueError(f"axisymmetric substrate: solver must be 'direct', got {solver!r}")
         if force_convention not in FORCE_CONVENTIONS:
             raise ValueError(f"force_convention must be one of {FORCE_CONVENTIONS}, got "
                              f"{force_convention!r}")
-        if not (E > 0 and -1 < nu < 0.5):
-            raise ValueError(f"need E > 0 and -1 < nu < 0.5, got E={E}, nu={nu}")
+        self.force_convention = force_convention
+        if intorder is None and element in ("P1", "P2"):
+            intorder = 2 * int(element[1]) + 1
+        super().__init__(mesh, E, nu, alpha, T0=T0, element=element, clamps=clamps,
+                         rollers=rollers, solver=solver, pin_rigid=pin_rigid,
+                         nthreads=nthreads, direct_backend=direct_backend, intorder=intorder)
+        self.r_qp = self.basis.global_coordinates()[0]  # (nelems, nqp)
+        self.rdx = self.r_qp * self.basis.dx  # r-weighted quadrature weights
+
+    # ------------------------------------------------------------------ geometry hooks
+    def _prepare_mesh(self, mesh):
+        """A 2D (r, z) mesh with r >= 0, its facets on the axis named "axis"."""
+        if not isinstance(mesh, (MeshTri1, MeshQuad1)):
+            raise ValueError(f"axisymmetric substrate: need a 2D (r, z) mesh of triangles or "
+                             f"quadrilaterals, got {type(mesh).__name__}")
         span = float(np.ptp(mesh.p, axis=1).max())
         self._r_axis = 1e-12 * span
         if mesh.p[0].min() < -self._r_axis:
             raise ValueError(f"axisymmetric substrate: the mesh reaches r = "
                              f"{mesh.p[0].min():.3g} < 0; x[0] is the radius (r >= 0)")
-        self.mesh = mesh = self._with_axis(mesh)
-        self.timings["load_mesh"] = time.perf_counter() - t0
-        self.E, self.nu, self.alpha, self.T0 = float(E), float(nu), float(alpha), float(T0)
-        self.lam, self.mu = forms.lame_parameters(self.E, self.nu)
-        self.element, self.solver, self.direct_backend = element, solver, direct_backend
-        self.force_convention = force_convention
-        self.dim = 2
-        self.n_factorizations = 0
-        self.n_solves = 0
-        self.cg_iterations: list[int] = []
-        p = int(element[1])
-        self.intorder = 2 * p + 1 if intorder is None else int(intorder)
+        return self._with_axis(mesh)
 
-        escal = _ELEMENTS[(type(mesh), element)]()
-        self.basis = Basis(mesh, ElementVector(escal, dim=2), intorder=self.intorder)
-        self.sbasis = self.basis.with_element(escal)
-        self.vbasis = self.basis.with_element(_ELEMENTS[(type(mesh), "P1")]())
-        self.component_dofs = self.basis.split_indices()
-        self._facet_bases = {}
-        self.r_qp = self.basis.global_coordinates()[0]  # (nelems, nqp)
-        self.rdx = self.r_qp * self.basis.dx  # r-weighted quadrature weights
+    def _roller_components(self, spec) -> list[int]:
+        return _rz_components(spec)
 
-        # --- boundary conditions: the axis always carries u_r = 0 -------------------
-        clamps = [clamps] if isinstance(clamps, str) else list(clamps)
-        rollers = dict(rollers or {})
-        D = [self._group_dofs(g) for g in clamps]
-        holds_z = bool(clamps)
-        for g, comps in rollers.items():
-            d = self._group_dofs(g)
-            for c in _rz_components(comps):
-                D.append(np.intersect1d(d, self.component_dofs[c]))
-                holds_z |= c == 1
-        if "axis" in mesh.boundaries:
-            D.append(np.intersect1d(self._group_dofs("axis"), self.component_dofs[0]))
-        if pin_rigid is None:
-            pin_rigid = not holds_z
-        if pin_rigid:
-            D.append(self._rigid_pins())
-        self.D = np.unique(np.concatenate(D)).astype(np.int64) if D else np.zeros(0, np.int64)
-        self.I = np.setdiff1d(np.arange(self.basis.N), self.D)
-        self.clamps, self.rollers, self.pin_rigid = clamps, rollers, bool(pin_rigid)
+    def _symmetry_dofs(self) -> list[np.ndarray]:
+        """The axis carries u_r = 0."""
+        if "axis" not in self.mesh.boundaries:
+            return []
+        return [np.intersect1d(self._group_dofs("axis"), self.component_dofs[0])]
 
-        # --- stiffness, once ------------------------------------------------------
-        t1 = time.perf_counter()
-        K = axisymmetric_elasticity(self.lam, self.mu)
-        if nthreads:
-            K = type(K)(K.form, nthreads=nthreads)
-        with stage(f"assembling axisymmetric K ({self.basis.N} dofs)"):
-            self.K = K.assemble(self.basis).tocsr()
-        self.timings["assemble_K"] = time.perf_counter() - t1
-        t2 = time.perf_counter()
-        with stage(f"factorising axisymmetric K ({len(self.I)} unknowns)"):
-            self._factorize()
-        self.timings["factorize"] = time.perf_counter() - t2
-        self._u_prev = None
-        self._mass = None
-        logger.info("AxisymmetricFEMSubstrate: %s %s, %d dofs (%d free); assembly %.2f s, "
-                    "factorisation %.2f s", type(mesh).__name__, element, self.basis.N,
-                    len(self.I), self.timings["assemble_K"], self.timings["factorize"])
+    def _free_to_move(self, clamps, held: set) -> bool:
+        """The axis leaves one rigid motion, a z translation: free unless z is held."""
+        return not clamps and 1 not in held
 
     # ------------------------------------------------------------------ set-up
     def _with_axis(self, mesh):
@@ -423,21 +379,6 @@ class AxisymmetricFEMSubstrate(FEMSubstrate):
         return TWO_PI * self.rdx.sum(axis=-1)
 
     # ------------------------------------------------------------------ loads
-    def thermal_load(self, dT) -> np.ndarray:
-        return axisymmetric_thermal_load(self.lam, self.mu, self.alpha).assemble(
-            self.basis, dT=self._dT_qp(dT))
-
-    def traction_load(self, tractions: dict) -> np.ndarray:
-        """``{group: t}`` with t = (t_r, t_z) constant or callable of x [Pa]: per-radian
-        nodal loads ``int t . v r ds``."""
-        f = self.basis.zeros()
-        for g, t in tractions.items():
-            f += axisymmetric_traction_load(t).assemble(self.facet_basis(g))
-        return f
-
-    def body_force_load(self, force) -> np.ndarray:
-        return axisymmetric_body_force_load(force).assemble(self.basis)
-
     def point_force_load(self, points, forces, snap: str | None = "top") -> np.ndarray:
         """Per-radian nodal loads f = P^T F_rad of point forces (n, 2) at points (n, 2) =
         (r, z), F_rad the forces per radian (:func:`per_radian` of ``force_convention``):

@@ -282,10 +282,19 @@ class FEMSubstrate(QuasiStaticSubstrate):
     nthreads : threads for the stiffness assembly.
     """
 
+    #: the ``solver`` choices of this substrate
+    solvers = ("direct", "cg-amg")
+    #: the weak forms (:mod:`sphfem.fem.forms`): a subclass states its own (axisymmetric)
+    stiffness_form = staticmethod(forms.elasticity)
+    thermal_form = staticmethod(forms.thermal_load)
+    traction_form = staticmethod(forms.traction_load)
+    body_force_form = staticmethod(forms.body_force_load)
+
     def __init__(self, mesh, E: float, nu: float, alpha: float, T0: float = 293.15,
                  element: str = "P1", clamps=(), rollers=None, solver: str = "direct",
                  pin_rigid: bool | None = None, rtol: float = 1e-10, maxiter: int = 2000,
-                 nthreads: int | None = None, direct_backend: str = "auto"):
+                 nthreads: int | None = None, direct_backend: str = "auto",
+                 intorder: int | None = None):
         t0 = time.perf_counter()
         self.timings: dict[str, float] = {}
         if isinstance(mesh, (str, os.PathLike)):
@@ -293,26 +302,27 @@ class FEMSubstrate(QuasiStaticSubstrate):
             mesh = load_mesh(mesh)
         else:
             self.mesh_path = None
-        self.mesh = mesh
-        self.timings["load_mesh"] = time.perf_counter() - t0
         if element not in ("P1", "P2"):
             raise ValueError(f"element must be 'P1' or 'P2', got {element!r}")
-        if solver not in ("direct", "cg-amg"):
-            raise ValueError(f"solver must be 'direct' or 'cg-amg', got {solver!r}")
+        if solver not in self.solvers:
+            raise ValueError(f"solver must be one of {self.solvers}, got {solver!r}")
         if not (E > 0 and -1 < nu < 0.5):
             raise ValueError(f"need E > 0 and -1 < nu < 0.5, got E={E}, nu={nu}")
+        self.mesh = mesh = self._prepare_mesh(mesh)
+        self.timings["load_mesh"] = time.perf_counter() - t0
         self.E, self.nu, self.alpha, self.T0 = float(E), float(nu), float(alpha), float(T0)
         self.lam, self.mu = forms.lame_parameters(self.E, self.nu)
         self.element, self.solver = element, solver
         self.rtol, self.maxiter = rtol, maxiter
         self.direct_backend = direct_backend
+        self.intorder = intorder
         self.dim = mesh.p.shape[0]
         self.n_factorizations = 0
         self.n_solves = 0
         self.cg_iterations: list[int] = []
 
         escal = _ELEMENTS[(type(mesh), element)]()
-        self.basis = Basis(mesh, ElementVector(escal, dim=self.dim))
+        self.basis = Basis(mesh, ElementVector(escal, dim=self.dim), intorder=intorder)
         self.sbasis = self.basis.with_element(escal)  # scalar, same order
         self.vbasis = self.basis.with_element(_ELEMENTS[(type(mesh), "P1")]())  # vertices
         self.component_dofs = self.basis.split_indices()
@@ -322,12 +332,15 @@ class FEMSubstrate(QuasiStaticSubstrate):
         clamps = [clamps] if isinstance(clamps, str) else list(clamps)
         rollers = dict(rollers or {})
         D = [self._group_dofs(g) for g in clamps]
+        held = set()
         for g, comps in rollers.items():
             d = self._group_dofs(g)
-            for c in _component_indices(comps, self.dim):
+            for c in self._roller_components(comps):
                 D.append(np.intersect1d(d, self.component_dofs[c]))
+                held.add(c)
+        D += self._symmetry_dofs()
         if pin_rigid is None:
-            pin_rigid = not clamps and not rollers
+            pin_rigid = self._free_to_move(clamps, held)
         if pin_rigid:
             D.append(self._rigid_pins())
         self.D = np.unique(np.concatenate(D)).astype(np.int64) if D else np.zeros(0, np.int64)
@@ -336,16 +349,11 @@ class FEMSubstrate(QuasiStaticSubstrate):
 
         # --- stiffness, once ------------------------------------------------------
         t1 = time.perf_counter()
-        K = forms.elasticity(self.lam, self.mu)
+        K = self.stiffness_form(self.lam, self.mu)
         if nthreads:
             K = type(K)(K.form, nthreads=nthreads)
-        kbasis = self.basis
-        if isinstance(mesh, (MeshTet1, MeshTri1)):
-            # grad u : grad v is a polynomial of degree 2(p-1) on an affine simplex: the
-            # minimal exact rule is 1 point for P1 (4x cheaper than the default rule)
-            kbasis = Basis(mesh, self.basis.elem, intorder=2 * (int(element[1]) - 1))
         with stage(f"assembling K ({self.basis.N} dofs)"):
-            self.K = K.assemble(kbasis).tocsr()
+            self.K = K.assemble(self._stiffness_basis()).tocsr()
         self.timings["assemble_K"] = time.perf_counter() - t1
         t2 = time.perf_counter()
         what = "factorising" if solver == "direct" else "building the AMG preconditioner of"
@@ -354,9 +362,36 @@ class FEMSubstrate(QuasiStaticSubstrate):
         self.timings["factorize"] = time.perf_counter() - t2
         self._u_prev = None
         self._mass = None
-        logger.info("FEMSubstrate: %s %s, %d dofs (%d free), %s; assembly %.2f s, "
-                    "factorisation %.2f s", type(mesh).__name__, element, self.basis.N,
-                    len(self.I), solver, self.timings["assemble_K"], self.timings["factorize"])
+        logger.info("%s: %s %s, %d dofs (%d free), %s; assembly %.2f s, "
+                    "factorisation %.2f s", type(self).__name__, type(mesh).__name__, element,
+                    self.basis.N, len(self.I), solver, self.timings["assemble_K"],
+                    self.timings["factorize"])
+
+    # ------------------------------------------------------------------ geometry hooks
+    def _prepare_mesh(self, mesh):
+        """The mesh the substrate works on (a subclass checks or extends it)."""
+        return mesh
+
+    def _roller_components(self, spec) -> list[int]:
+        """Displacement components held by a roller spec ('z', 'xy', [0, 2])."""
+        return _component_indices(spec, self.dim)
+
+    def _symmetry_dofs(self) -> list[np.ndarray]:
+        """Dofs held by the geometry itself (none in plane strain / 3D)."""
+        return []
+
+    def _free_to_move(self, clamps, held: set) -> bool:
+        """Whether rigid motions are left (``pin_rigid`` default): nothing constrains the
+        body."""
+        return not clamps and not held
+
+    def _stiffness_basis(self) -> Basis:
+        """The basis K is assembled on: on affine simplices with the default quadrature,
+        grad u : grad v is a polynomial of degree 2(p-1), so the minimal exact rule (1 point
+        for P1, 4x cheaper than the default rule)."""
+        if self.intorder is None and isinstance(self.mesh, (MeshTet1, MeshTri1)):
+            return Basis(self.mesh, self.basis.elem, intorder=2 * (int(self.element[1]) - 1))
+        return self.basis
 
     # ------------------------------------------------------------------ set-up
     @property
@@ -470,7 +505,7 @@ class FEMSubstrate(QuasiStaticSubstrate):
 
     def thermal_load(self, dT) -> np.ndarray:
         """Load vector of the thermal strain for the temperature change ``dT``."""
-        return forms.thermal_load(self.lam, self.mu, self.alpha).assemble(
+        return self.thermal_form(self.lam, self.mu, self.alpha).assemble(
             self.basis, dT=self._dT_qp(dT))
 
     def facet_basis(self, group: str) -> FacetBasis:
@@ -485,11 +520,11 @@ class FEMSubstrate(QuasiStaticSubstrate):
         [Pa], integrated over the facets of the group."""
         f = self.basis.zeros()
         for g, t in tractions.items():
-            f += forms.traction_load(t).assemble(self.facet_basis(g))
+            f += self.traction_form(t).assemble(self.facet_basis(g))
         return f
 
     def body_force_load(self, force) -> np.ndarray:
-        return forms.body_force_load(force).assemble(self.basis)
+        return self.body_force_form(force).assemble(self.basis)
 
     def snap_to_surface(self, points, group: str = "top") -> np.ndarray:
         """Move points (n, dim) onto the nearest facet of ``group`` (projection on the facet
