@@ -226,7 +226,7 @@ def main(argv=None):
     res["pairs_in_R"] = int(_pairs_within(s.p.x, nl.offsets, nl.indices, s.R, s.p.kind))
     res["list_entries"] = int(nl.n_pairs)
     res.update(row_entries(s, nl))
-    res["threading_layer"] = compare._threading_layer()
+    res["threading_layer"] = compare.threading_layer()
     res["runs"] = []
     for cs in a.chunksizes:
         for t in (1, 2):
