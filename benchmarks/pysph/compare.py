@@ -38,7 +38,6 @@ import argparse
 import datetime
 import json
 import os
-import platform
 import subprocess
 import sys
 import time
@@ -54,6 +53,7 @@ import run_pysph  # noqa: E402
 from sphfem.fluid.bench import REBUILD_EVERY, _pairs_within  # noqa: E402
 from sphfem.fluid.setup import box_walls, hydrostatic_density, lattice, make_particles  # noqa: E402
 from sphfem.fluid.wcsph import FluidParams, FluidSolver  # noqa: E402
+from sphfem.machine import machine_info, threading_layer  # noqa: E402
 from sphfem.particles import FLUID  # noqa: E402
 
 G = 9.81
@@ -153,7 +153,7 @@ def bench_ours(build, threads: int, blocks: int = 3, block_seconds: float = 2.0,
     d = s.diagnostics()
     return {
         "code": "sphfem", "threads": threads, "numba_threads": numba.get_num_threads(),
-        "threading_layer": _threading_layer(), "n_fluid": nf, "n_total": n,
+        "threading_layer": threading_layer(), "n_fluid": nf, "n_total": n,
         "dim": s.dim, "R": s.R, "R_over_dx": None, "pairs": pairs,
         "list_pairs": int(nl.n_pairs), "setup_s": setup_s, "steps_per_block": steps,
         "blocks": blocks, "block_step_s": times, "step_s": step_s, "build_s": build_s,
@@ -166,28 +166,6 @@ def bench_ours(build, threads: int, blocks: int = 3, block_seconds: float = 2.0,
         "rho_ratio_range": d["rho_ratio_range"], "max_speed": d["max_speed"],
         "loadavg_end": run_pysph.loadavg(),
     }
-
-
-def _threading_layer():
-    try:
-        return numba.threading_layer()
-    except ValueError:
-        return "not initialised"
-
-
-def machine() -> dict:
-    cpu = platform.processor() or ""
-    try:
-        with open("/proc/cpuinfo") as f:
-            for ln in f:
-                if ln.startswith("model name"):
-                    cpu = ln.split(":", 1)[1].strip()
-                    break
-    except OSError:
-        pass
-    return {"cpu": cpu, "cores": os.cpu_count(), "platform": platform.platform(),
-            "python": platform.python_version(), "numba": numba.__version__,
-            "numpy": np.__version__}
 
 
 def git_head() -> str:
@@ -218,7 +196,7 @@ def main(argv=None):
 
     started = datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds")
     la0 = run_pysph.loadavg()
-    results = {"date": started, "loadavg_start": la0, "machine": machine(),
+    results = {"date": started, "loadavg_start": la0, "machine": machine_info(),
                "git_head": git_head(), "pysph_versions": run_pysph.pysph_version(
                    a.pysph_python), "command": " ".join([sys.executable] + sys.argv),
                "runs": []}

@@ -14,12 +14,12 @@ from __future__ import annotations
 
 import argparse
 import json
-import os
-import platform
 import sys
 import time
 
 import numpy as np
+
+from sphfem.machine import machine_info
 
 #: name -> (h_fine, h_coarse, solvers)
 SIZES = {
@@ -84,12 +84,6 @@ def bench_one(name, h_fine, h_coarse, solver, repeats=3) -> dict:
     if its:
         res["cg_iterations"] = its
     return res
-
-
-def machine_info() -> dict:
-    return {"date": time.strftime("%Y-%m-%d %H:%M"), "python": sys.version.split()[0],
-            "platform": platform.platform(), "cpus": os.cpu_count(),
-            "load_avg": os.getloadavg() if hasattr(os, "getloadavg") else None}
 
 
 def run_fem_bench(quick: bool = False, sizes=None, repeats: int = 3, log=print) -> dict:
