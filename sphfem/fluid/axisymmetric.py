@@ -529,9 +529,9 @@ class AxisymmetricFluid:
                self.s2, self.kcode, self.Lz, self.gravity, pa.eps_visc, pa.delta * pa.c0,
                pa.alpha * pa.c0,
                0.0 if self.planar else 1.0, Bm, qh, acc, drho)
-        if self.csf is not None:  # CSF with the fluid's median support radius
+        if self.csf is not None:  # CSF over the fluid's widest support (adaptive_h)
             self.csf.accumulate(x, A, rho, kind, nl.offsets, nl.indices, n, src, mtype,
-                                float(np.median(Rp[:n][self.fluid])), self.Lz, acc)
+                                float(Rp[:n][self.fluid].max()), self.Lz, acc)
         self.acc[:] = acc[:n]
         self.drho[:] = drho[:n]
         self.p[:] = p[:n]
