@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from builders import isolated_cache  # noqa: F401  (autouse: a private mesh cache)
 
 from coupling.backend_fem_axisymmetric import AxisymmetricFEMBackend
 from coupling.backends import BACKENDS, make_backend
@@ -13,12 +14,6 @@ E, NU, ALPHA = 300e9, 0.21, 7e-6
 R_SUB, DEPTH = 1.0, 0.4
 
 
-@pytest.fixture(scope="module", autouse=True)
-def _cache(tmp_path_factory):
-    mp = pytest.MonkeyPatch()
-    mp.setenv("SPHFEM_CACHE", str(tmp_path_factory.mktemp("cache")))
-    yield
-    mp.undo()
 
 
 def substrate(**kw):

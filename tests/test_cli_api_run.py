@@ -14,8 +14,8 @@ import tomllib
 from pathlib import Path
 
 import pytest
+from builders import to_toml
 from test_api_docs import UNSTABLE
-from test_cli_bad_input import to_toml
 
 import sphfem
 from sphfem import api

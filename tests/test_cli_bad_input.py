@@ -21,6 +21,7 @@ import tomllib
 from pathlib import Path
 
 import pytest
+from builders import Raw, to_toml
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
@@ -55,59 +56,6 @@ SCENE = {
     "time": {"t_end": 1.0e-3, "max_steps": 3},
     "output": {"every": 5.0e-4},
 }
-
-
-# -- a small TOML writer (the scenes are built as dicts, written, and read back by sphfem) --
-
-class Raw(str):
-    """A TOML literal written as is (dates, which Python values cannot express here)."""
-
-
-def _key(k: str) -> str:
-    return k if re.fullmatch(r"[A-Za-z0-9_-]+", k) else _value(k)
-
-
-def _value(v) -> str:
-    if isinstance(v, Raw):
-        return str(v)
-    if isinstance(v, bool):
-        return "true" if v else "false"
-    if isinstance(v, int):
-        return str(v)
-    if isinstance(v, float):
-        return "nan" if math.isnan(v) else "inf" if v == math.inf else \
-            "-inf" if v == -math.inf else repr(v)
-    if isinstance(v, str):  # JSON escapes are TOML escapes; TOML also bars DEL
-        return json.dumps(v, ensure_ascii=False).replace("\x7f", "\\u007f")
-    if isinstance(v, list):
-        return "[" + ", ".join(_value(x) for x in v) + "]"
-    if isinstance(v, dict):
-        return "{" + ", ".join(f"{_key(k)} = {_value(x)}" for k, x in v.items()) + "}"
-    raise TypeError(v)
-
-
-def _is_table_array(v) -> bool:
-    return isinstance(v, list) and bool(v) and all(isinstance(x, dict) for x in v)
-
-
-def _body(t: dict, path: list[str], lines: list[str]) -> None:
-    for k, v in t.items():
-        if not isinstance(v, dict) and not _is_table_array(v):
-            lines.append(f"{_key(k)} = {_value(v)}")
-    for k, v in t.items():
-        if isinstance(v, dict):
-            lines += ["", "[" + ".".join(map(_key, path + [k])) + "]"]
-            _body(v, path + [k], lines)
-        elif _is_table_array(v):
-            for item in v:
-                lines += ["", "[[" + ".".join(map(_key, path + [k])) + "]]"]
-                _body(item, path + [k], lines)
-
-
-def to_toml(d: dict) -> str:
-    lines: list[str] = []
-    _body(d, [], lines)
-    return "\n".join(lines).lstrip("\n") + "\n"
 
 
 def changed(path: str, value=None, delete: bool = False, base: dict = SCENE) -> dict:

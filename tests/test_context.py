@@ -8,6 +8,7 @@ from types import SimpleNamespace
 
 import numpy as np
 import pytest
+from builders import periodic_box_toml
 
 from sphfem.context import StepContext
 from sphfem.particles import GHOST, SOLID, ParticleSet
@@ -59,33 +60,12 @@ every = 1.0e-3
 fields = ["T"]
 """
 
-BOX = """
-[scene]
-name = "box"
-dim = 2
-[domain]
-lo = [0.0, 0.0]
-hi = [1.0, 1.0]
-periodic = [true, true]
-[sph]
-dx = 0.05
-skin = 0.2
-sort_every = 1
-[materials.m]
-rho0 = 1.0
-[[blocks]]
-name = "b"
-shape = "box"
-kind = "solid"
-material = "m"
-lo = [0.0, 0.0]
-hi = [1.0, 1.0]
-[physics]
-modules = {modules}
-[time]
-t_end = 1.0
-max_steps = {steps}
-"""
+def _box(modules, steps: int):
+    """The periodic unit box (:func:`builders.periodic_box`) of a mechanical material,
+    list rebuilt and cell-sorted at every step, run for ``steps`` steps."""
+    return parse_scene_toml(periodic_box_toml(
+        modules, name="box", sph={"skin": 0.2, "sort_every": 1}, material={"rho0": 1.0},
+        time={"t_end": 1.0, "max_steps": steps}, output={}), "b.toml")
 
 
 def _brute_pairs(x, R, period):
@@ -165,7 +145,7 @@ def toy_modules():
 
 
 def test_appended_hook_gets_the_new_indices_after_one_rebuild(toy_modules):
-    sim = Simulation(parse_scene_toml(BOX.format(modules='["appender"]', steps=1), "b.toml"))
+    sim = Simulation(_box(["appender"], 1))
     mod = sim.modules[0]
     n0 = mod.n_at_init
     np.testing.assert_array_equal(mod.index, np.arange(n0, n0 + 3))
@@ -178,8 +158,7 @@ def test_only_ghosts_may_be_appended(toy_modules):
     """Real particles come from the scene's blocks; a module asking to append some is a
     programming error, reported with the module's name."""
     with pytest.raises(ValueError, match="real_appender.*ghosts"):
-        Simulation(parse_scene_toml(BOX.format(modules='["real_appender"]', steps=1),
-                                    "b.toml"))
+        Simulation(_box(["real_appender"], 1))
 
 
 def test_resumed_run_places_the_ghosts_anew_and_ends_equal(tmp_path):
@@ -229,7 +208,7 @@ class _Jumper(PhysicsModule):
 
 
 def test_a_moving_module_gets_a_valid_list_mid_step(toy_modules):
-    sim = Simulation(parse_scene_toml(BOX.format(modules='["jumper"]', steps=3), "b.toml"))
+    sim = Simulation(_box(["jumper"], 3))
     for _ in range(3):
         sim.step(1.0)
     checks = sim.modules[0].checks

@@ -7,6 +7,7 @@ import importlib.util
 import meshio
 import numpy as np
 import pytest
+from builders import isolated_cache  # noqa: F401  (autouse: a private mesh cache)
 
 from sphfem.fem import FEMSeries, FEMSubstrate, mesh_command, substrate_block, substrate_rect
 from sphfem.fem.substrate import load_mesh
@@ -18,12 +19,6 @@ BOX = dict(size=(1.0, 0.8, 0.3), origin=(0.0, 0.0, 0.0), refine_center=(0.5, 0.4
            refine_radius=0.15)
 
 
-@pytest.fixture(scope="module", autouse=True)
-def _cache(tmp_path_factory):
-    mp = pytest.MonkeyPatch()
-    mp.setenv("SPHFEM_CACHE", str(tmp_path_factory.mktemp("cache")))
-    yield
-    mp.undo()
 
 
 def block(element="tet", h=0.1):

@@ -18,6 +18,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from builders import isolated_cache  # noqa: F401  (autouse: a private mesh cache)
 from skfem import MeshQuad, MeshTri
 
 from sphfem.fem import FEMSubstrate
@@ -43,14 +44,6 @@ from sphfem.validation.fem_axisymmetric import (
     radial_exact,
     rl2,
 )
-
-
-@pytest.fixture(scope="module", autouse=True)
-def _cache(tmp_path_factory):
-    mp = pytest.MonkeyPatch()
-    mp.setenv("SPHFEM_CACHE", str(tmp_path_factory.mktemp("cache")))
-    yield
-    mp.undo()
 
 
 def orders(errors, sizes=None):

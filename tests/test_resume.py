@@ -9,46 +9,13 @@ import time
 
 import numpy as np
 import pytest
+from builders import periodic_box_toml, solid_box
 
-SCENE = """
-[scene]
-name = "resume_heat"
-dim = 2
-[domain]
-lo = [0.0, 0.0]
-hi = [1.0, 1.0]
-periodic = [true, true]
-[sph]
-dx = 0.02
-[materials.m]
-rho0 = 1.0
-c = 1.0
-k = 1.0
-[[blocks]]
-name = "cold"
-shape = "box"
-kind = "solid"
-material = "m"
-lo = [0.0, 0.0]
-hi = [0.5, 1.0]
-temperature = 300.0
-[[blocks]]
-name = "hot"
-shape = "box"
-kind = "solid"
-material = "m"
-lo = [0.5, 0.0]
-hi = [1.0, 1.0]
-temperature = 400.0
-[physics]
-modules = ["heat"]
-[time]
-t_end = 0.02
-dt = 2.0e-6
-[output]
-every = 1.0e-3
-fields = ["T"]
-"""
+SCENE = periodic_box_toml(
+    name="resume_heat", dx=0.02,
+    blocks=[solid_box("cold", (0.0, 0.0), (0.5, 1.0), temperature=300.0),
+            solid_box("hot", (0.5, 0.0), (1.0, 1.0), temperature=400.0)],
+    time={"t_end": 0.02, "dt": 2.0e-6}, output={"every": 1.0e-3, "fields": ["T"]})
 
 
 def _final_T(out):

@@ -10,6 +10,7 @@ import time
 
 import numpy as np
 import pytest
+from builders import periodic_box_toml, solid_box
 
 from sphfem import progress
 from sphfem.cli import main
@@ -18,36 +19,10 @@ from sphfem.scene import parse_scene_toml
 from sphfem.schema import register_module, unregister
 from sphfem.simulation import Simulation, format_summary
 
-SCENE = """
-[scene]
-name = "periodic_heat"
-dim = 2
-[domain]
-lo = [0.0, 0.0]
-hi = [1.0, 1.0]
-periodic = [true, true]
-[sph]
-dx = 0.05
-[materials.m]
-rho0 = 1.0
-c = 1.0
-k = 1.0
-[[blocks]]
-name = "b"
-shape = "box"
-kind = "solid"
-material = "m"
-lo = [0.0, 0.0]
-hi = [1.0, 1.0]
-temperature = 300.0
-[physics]
-modules = {modules}
-[time]
-t_end = 2.0e-3
-dt = 2.0e-5
-[output]
-every = 1.0e-3
-"""
+
+def _scene_text(modules=("heat",)) -> str:
+    """The periodic unit box (:func:`builders.periodic_box`) at 300 K."""
+    return periodic_box_toml(modules, blocks=[solid_box(temperature=300.0)])
 
 INIT_S, STEP_S = 3.0, 0.002  # a set-up sleep far above the loop time, even on a loaded machine
 
@@ -72,9 +47,9 @@ def slow_module():
     MODULES.pop("slowinit", None)
 
 
-def _scene_file(tmp_path, modules='["heat"]'):
+def _scene_file(tmp_path, modules=("heat",)):
     f = tmp_path / "scene.toml"
-    f.write_text(SCENE.format(modules=modules))
+    f.write_text(_scene_text(modules))
     return f
 
 
@@ -82,7 +57,7 @@ def test_setup_stepping_and_total_seconds(slow_module, tmp_path):
     """A module's set-up counts in setup_s, not in the stepping loop's wall_s, and
     total_s covers both (the sleeps give lower bounds that the old summary, with only
     the loop's wall_s, could not meet)."""
-    scene = parse_scene_toml(SCENE.format(modules='["heat", "slowinit"]'), "mem.toml")
+    scene = parse_scene_toml(_scene_text(("heat", "slowinit")), "mem.toml")
     sim = Simulation(scene)
     s = sim.run(tmp_path, progress=False)
     d = json.loads((tmp_path / "summary.json").read_text())
@@ -158,7 +133,7 @@ def test_results_respect_the_umask(tmp_path, umask, mode):
     """Atomic writes go through mkstemp (always 0600); results get 0666 & ~umask."""
     old = os.umask(umask)
     try:
-        scene = parse_scene_toml(SCENE.format(modules='["heat"]'), "mem.toml")
+        scene = parse_scene_toml(_scene_text(), "mem.toml")
         out = tmp_path / "out"
         Simulation(scene).run(out, progress=False, keep_checkpoint=True)
     finally:
@@ -168,7 +143,7 @@ def test_results_respect_the_umask(tmp_path, umask, mode):
 
 
 def test_checkpoint_deleted_after_completion_unless_kept(tmp_path):
-    scene = parse_scene_toml(SCENE.format(modules='["heat"]'), "mem.toml")
+    scene = parse_scene_toml(_scene_text(), "mem.toml")
     a, b = tmp_path / "a", tmp_path / "b"
     sa = Simulation(scene).run(a, progress=False)
     sb = Simulation(scene).run(b, progress=False, keep_checkpoint=True)

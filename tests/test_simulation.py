@@ -5,6 +5,7 @@ import json
 
 import numpy as np
 import pytest
+from builders import UNIT_MATERIAL, periodic_box_toml, solid_box
 
 from sphfem.cli import main
 from sphfem.geometry import build_particles
@@ -13,37 +14,11 @@ from sphfem.scene import parse_scene_toml
 from sphfem.schema import register_module, unregister
 from sphfem.simulation import Simulation
 
-SCENE = """
-[scene]
-name = "periodic_heat"
-dim = 2
-[domain]
-lo = [0.0, 0.0]
-hi = [1.0, 1.0]
-periodic = [true, true]
-[sph]
-dx = 0.05
-sort_every = 1
-skin = 0.2
-[materials.m]
-rho0 = 1.0
-c = 1.0
-k = 1.0
-[[blocks]]
-name = "b"
-shape = "box"
-kind = "solid"
-material = "m"
-lo = [0.0, 0.0]
-hi = [1.0, 1.0]
-[physics]
-modules = {modules}
-[time]
-t_end = 2.0e-3
-dt = 2.0e-5
-[output]
-every = 1.0e-3
-"""
+
+def _scene_text(modules=("heat",), **kw) -> str:
+    """The periodic unit box (:func:`builders.periodic_box`) with a list rebuilt and
+    cell-sorted at every step."""
+    return periodic_box_toml(modules, sph={"sort_every": 1, "skin": 0.2}, **kw)
 
 
 class Drift(PhysicsModule):
@@ -80,7 +55,7 @@ def test_translation_invariance_through_rebuilds_and_resorting(drift_module, tmp
     although the drift forces neighbour rebuilds and cell re-sorts (module reorder hooks)."""
     results = {}
     for mods in (["heat"], ["drift", "heat"]):
-        scene = parse_scene_toml(SCENE.format(modules=json.dumps(mods)), "mem.toml")
+        scene = parse_scene_toml(_scene_text(mods), "mem.toml")
         ps = build_particles(scene)
         ps.T[:] = _initial_field(ps)
         sim = Simulation(scene, particles=ps)
@@ -99,7 +74,7 @@ def test_translation_invariance_through_rebuilds_and_resorting(drift_module, tmp
 
 
 def test_summary_and_outputs(tmp_path):
-    scene = parse_scene_toml(SCENE.format(modules='["heat"]'), "mem.toml")
+    scene = parse_scene_toml(_scene_text(), "mem.toml")
     sim = Simulation(scene)
     summary = sim.run(tmp_path, progress=False)
     d = json.loads((tmp_path / "summary.json").read_text())
@@ -114,7 +89,7 @@ def test_summary_and_outputs(tmp_path):
 
 def test_cli_malformed_scene_one_line_exit_2_nothing_written(tmp_path, capsys):
     bad = tmp_path / "bad.toml"
-    bad.write_text(SCENE.format(modules='["heat"]').replace("rho0 = 1.0", "rho0 = -1.0"))
+    bad.write_text(_scene_text(material={**UNIT_MATERIAL, "rho0": -1.0}))
     out = tmp_path / "out"
     assert main(["run", str(bad), "--out", str(out)]) == 2
     err = capsys.readouterr().err.strip().splitlines()
@@ -124,7 +99,7 @@ def test_cli_malformed_scene_one_line_exit_2_nothing_written(tmp_path, capsys):
 
 def test_cli_refuses_existing_output(tmp_path, capsys):
     good = tmp_path / "good.toml"
-    good.write_text(SCENE.format(modules='["heat"]'))
+    good.write_text(_scene_text())
     out = tmp_path / "out"
     out.mkdir()
     (out / "keep.txt").write_text("precious")
@@ -137,15 +112,7 @@ def test_cli_refuses_existing_output(tmp_path, capsys):
 
 def test_cli_setup_error_before_any_output(tmp_path, capsys):
     """Overlapping blocks are found while building particles: one line, exit 2, no folder."""
-    scene = SCENE.format(modules='["heat"]') + """
-[[blocks]]
-name = "overlap"
-shape = "box"
-kind = "solid"
-material = "m"
-lo = [0.2, 0.2]
-hi = [0.4, 0.4]
-"""
+    scene = _scene_text(blocks=[solid_box(), solid_box("overlap", (0.2, 0.2), (0.4, 0.4))])
     f = tmp_path / "overlap.toml"
     f.write_text(scene)
     out = tmp_path / "out"
