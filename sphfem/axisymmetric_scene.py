@@ -23,9 +23,10 @@ sorts its list; nothing reads it in such a scene).
 Fluid (:class:`AxisymmetricFluidModule`): :class:`sphfem.fluid.axisymmetric.AxisymmetricFluid`
 with the scene's wall particles as its Adami walls (free-slip ghost of the wall plane in the
 continuity, normals from the nearest face of each wall box; Shepard-averaged hoop term;
-h ~ sqrt(A) as in ``examples/axisymmetric/droplet_crosscheck.py``; the kinematic
-no-penetration correction of the positions is off: it moves rings without a wall force, so
-the wall ring forces would no longer balance the fluid's momentum).  The force of the fluid
+h ~ sqrt(A) as in ``examples/axisymmetric/droplet_crosscheck.py``); the kinematic
+no-penetration correction of :mod:`sphfem.fluid.no_penetration` (rings that crossed the
+wall surface are put back on it and lose their inward normal velocity) is available
+(``AxisymmetricFluidModule.no_penetration``) and off by default.  The force of the fluid
 on each wall particle (``f_fluid``, the coupling's sensors) is the ring force
 
     F_w = - sum_i M_i a_(i<-w)                                                           (1)
@@ -35,7 +36,10 @@ pressure, viscous and artificial-viscosity pair accelerations a_(i<-w) that wall
 gives fluid i in the last force evaluation (the one of the step's velocity update); M_i the
 ring mass, so F_w is the total force on the ring of w [N] (the backend's "ring" convention)
 and sum_w F_w,z is the net axial force on the substrate, minus the rate of change of the
-fluid's axial momentum through the walls.
+fluid's axial momentum through the walls.  The no-penetration correction's normal momentum
+goes to the wall too: a ring whose velocity the correction changed by dv (the step's end
+velocity minus v_n + dt a) gives the wall particle nearest to it - M_i (dv . n) n / dt, n
+the wall normal there, so the walls' impulse still balances the fluid's axial momentum.
 
 Heat (:class:`AxisymmetricHeatModule`): eq. (1) of :mod:`sphfem.heat.axisymmetric`,
 
@@ -55,6 +59,7 @@ import time
 
 import numpy as np
 from numba import njit, prange
+from scipy.spatial import cKDTree
 
 from sphfem import kernels
 from sphfem.neighbors import build_neighbor_list
@@ -141,26 +146,37 @@ def wall_ring_forces(x, v, vg, rho, p, mt, mu, kind, offsets, indices, Rp, s2, k
 
 
 def box_wall_normals(scene, x, kind) -> np.ndarray | None:
-    """Outward unit normals (n, 2) of the wall particles: the normal of the nearest face of
-    the wall box block holding the particle (faces on the axis r = 0 excluded); zero rows
-    for other kinds.  None when a wall particle lies in no box block."""
-    boxes = [(np.asarray(b.lo, float), np.asarray(b.hi, float)) for b in scene.blocks
-             if b.kind == "wall" and b.shape == "box"]
+    """Outward unit normals (n, 2) of the wall particles: the normal of the nearest
+    *exposed* face of the wall box block holding the particle, a face being exposed when
+    the half-plane outside it meets the bounding box of a fluid block (so every layer of a
+    layered wall takes the normal of the face the fluid sees; faces on the axis r = 0 are
+    never exposed); zero rows for other kinds.  None when a wall particle lies in no box
+    block or its block has no exposed face."""
+    from sphfem.geometry import Shape
+
+    fluid = [Shape.from_block(b, 2).bounds() for b in scene.blocks if b.kind == "fluid"]
+    table = np.array([[-1.0, 0.0], [1.0, 0.0], [0.0, -1.0], [0.0, 1.0]])
     nrm = np.zeros_like(x)
     w = np.flatnonzero(kind == WALL)
     done = np.zeros(w.size, bool)
-    for lo, hi in boxes:
+    for b in scene.blocks:
+        if b.kind != "wall" or b.shape != "box":
+            continue
+        lo, hi = np.asarray(b.lo, float), np.asarray(b.hi, float)
+        # faces r = lo, r = hi, z = lo, z = hi: exposed if some fluid box lies beyond them
+        exposed = np.array([lo[0] > 0 and any(flo[0] < lo[0] for flo, _ in fluid),
+                            any(fhi[0] > hi[0] for _, fhi in fluid),
+                            any(flo[1] < lo[1] for flo, _ in fluid),
+                            any(fhi[1] > hi[1] for _, fhi in fluid)])
         xs = x[w]
         inside = np.all((xs >= lo - 1e-12) & (xs <= hi + 1e-12), axis=1) & ~done
-        if not inside.any():
+        if not inside.any() or not exposed.any():
             continue
         xs = xs[inside]
-        # distances to the faces: r = lo (not on the axis), r = hi, z = lo, z = hi
-        dist = np.column_stack([xs[:, 0] - lo[0] if lo[0] > 0 else np.full(len(xs), np.inf),
-                                hi[0] - xs[:, 0], xs[:, 1] - lo[1], hi[1] - xs[:, 1]])
-        face = np.argmin(dist, axis=1)
-        table = np.array([[-1.0, 0.0], [1.0, 0.0], [0.0, -1.0], [0.0, 1.0]])
-        nrm[w[inside]] = table[face]
+        dist = np.column_stack([xs[:, 0] - lo[0], hi[0] - xs[:, 0], xs[:, 1] - lo[1],
+                                hi[1] - xs[:, 1]])
+        dist[:, ~exposed] = np.inf
+        nrm[w[inside]] = table[np.argmin(dist, axis=1)]
         done[inside] = True
     return nrm if done.all() else None
 
@@ -177,6 +193,10 @@ class AxisymmetricFluidModule(PhysicsModule):
 
     name = "fluid"
     moves_particles = False  # it moves the fluid, but with its own list (module docstring)
+    #: the kinematic no-penetration correction of the position update (module docstring);
+    #: off: in the droplet job at dx = 6.25 um it stopped the run earlier (a ring through
+    #: the wall at 3.5 us with it, a ring out at 5.4 us without; issue 16 note)
+    no_penetration = False
 
     def __init__(self, scene):
         from sphfem.fluid.wcsph import params_from_scene
@@ -194,6 +214,7 @@ class AxisymmetricFluidModule(PhysicsModule):
         #: axial momentum at t = 0 and the walls' impulse since (a resumed run: None, the
         #: budget and the spread history cover the process that started at t = 0 only)
         self.mom0, self.impulse, self.t0 = None, 0.0, 0.0
+        self.max_depth = -math.inf
 
     def fields(self):
         f = np.float64
@@ -211,7 +232,12 @@ class AxisymmetricFluidModule(PhysicsModule):
         self.solver = AxisymmetricFluid(
             x, ps.v[idx], ps.rho[idx], kind, np.where(kind == FLUID, ps.m[idx], 0.0), A,
             ctx.R, self.params, kernel=self.scene.sph.kernel, adaptive_h=True,
-            wall_normals=nrm, smooth_hoop=True, no_penetration=False)
+            wall_normals=nrm, smooth_hoop=True, no_penetration=self.no_penetration)
+        self.nrm = nrm
+        wl = np.flatnonzero(kind == WALL)
+        self._walls = wl
+        self._wall_tree = cKDTree(x[wl]) if wl.size else None
+        self.correction_impulse = 0.0
         self.solver.t = ctx.t
         self.solver.step_count = ctx.step
         self.fl = kind == FLUID
@@ -248,14 +274,46 @@ class AxisymmetricFluidModule(PhysicsModule):
     def step(self, ctx, dt: float) -> None:
         from sphfem.errors import SimulationStopped
 
+        s = self.solver
+        v_n = s.v.copy()
         try:
-            self.solver.step(dt)
-        except FloatingPointError as e:
-            raise SimulationStopped(str(e)) from None
+            s.step(dt)
+        except (FloatingPointError, ValueError) as e:
+            raise SimulationStopped(f"axisymmetric fluid at t = {ctx.t:.4g} s: {e} (lowest "
+                                    f"fluid ring {self._depth(s):.2f} dx below the wall "
+                                    "top)") from None
         self._write_back(ctx)
+        self._correction_forces(ctx, v_n, dt)
+        self.max_depth = max(self.max_depth, self._depth(s))
         self.impulse += dt * float(ctx.particles.f_fluid[:, 1].sum())
         if self.wall_top is not None and self.D0 > 0:
             self.spread.append([ctx.t + dt, self.contact_diameter(ctx.particles)])
+
+    def _depth(self, s) -> float:
+        """How far the lowest fluid ring lies below the wall top [dx] (<= 0: above)."""
+        if self.wall_top is None:
+            return 0.0
+        return float((self.wall_top - s.x[self.fl, 1].min()) / self.dx)
+
+    def _correction_forces(self, ctx, v_n, dt: float) -> None:
+        """The no-penetration correction's normal momentum, as ring forces on the nearest
+        wall particles (module docstring)."""
+        s = self.solver
+        if s.no_penetration is None or self._wall_tree is None:
+            return
+        fl = np.flatnonzero(self.fl)
+        dv = s.v[fl] - (v_n[fl] + dt * s.acc[fl])
+        hit = np.flatnonzero(np.abs(dv).max(axis=1) > 0.0)
+        if hit.size == 0:
+            return
+        _, j = self._wall_tree.query(s.x[fl[hit]])
+        w = self._walls[j]
+        n = self.nrm[w]
+        dvn = (dv[hit] * n).sum(axis=1)
+        F = -(s.M[fl[hit]] * dvn / dt)[:, None] * n
+        ps = ctx.particles
+        np.add.at(ps.f_fluid, self.idx[w], F)
+        self.correction_impulse += dt * float(F[:, 1].sum())
 
     def contact_diameter(self, ps) -> float:
         """2 max r + dx over the fluid rings within 1.5 dx above the wall top (the wetted
@@ -296,6 +354,9 @@ class AxisymmetricFluidModule(PhysicsModule):
              "axial_momentum_kg_m_s": self.momentum(ps),
              "axial_momentum_initial_kg_m_s": self.mom0,
              "wall_axial_impulse_N_s": self.impulse,
+             "no_penetration_axial_impulse_N_s": self.correction_impulse,
+             "no_penetration_corrections": int(s.penetration_corrections),
+             "max_ring_depth_below_wall_top_dx": self.max_depth,
              "axial_momentum_residual_rel": self.momentum_residual(ps),
              "wall_s": dict(s.wall_s), "steps": s.step_count}
         if self.D0 > 0 and len(sp):
