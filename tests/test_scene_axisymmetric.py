@@ -226,3 +226,44 @@ def test_heat_rings_conserve_and_follow_erf(tmp_path):
     middle = np.abs(x[:, 1]) < 10 * dx  # away from the insulated top and bottom
     assert err[middle & (x[:, 0] < dx)].max() < 5e-3
     assert err[middle & (x[:, 0] < 0.5 * n * dx)].max() < 5e-3
+
+
+def test_wall_normals_of_a_layered_wall():
+    """Every layer of the substrate takes the normal of the face the droplet sees, +e_z
+    (before the fix the lower layers took their nearest face's, the bottom's -e_z, which
+    the free-slip ghost and the no-penetration correction then used)."""
+    from sphfem.axisymmetric_scene import box_wall_normals, build_ring_particles
+
+    scene = parse_scene(droplet_scene())
+    ps = build_ring_particles(scene)
+    n = box_wall_normals(scene, ps.x, ps.kind)
+    wall = ps.kind == WALL
+    np.testing.assert_array_equal(n[wall], np.tile([0.0, 1.0], (int(wall.sum()), 1)))
+    assert not n[~wall].any()
+
+
+def test_short_coupled_impact(tmp_path):
+    """The droplet job's physics in (r, z) to 0.5 t_c at dx = 6.25 um: fluid, ring heat,
+    fem-contact substrate heat and the fem-axisymmetric stress.  The heat the fluid lost is
+    the heat the FEM gained to round-off (bound 1e-10), the ring conduction conserves its
+    energy, heat went in (a fraction of the ideal contact's between 0.5 and 1.5), the
+    substrate is loaded (peak von Mises after contact), outputs are written."""
+    data = droplet_scene(modules=("fluid", "heat", "coupling"), t_end="0.5 tc", coupling={
+        "backend": "fem-axisymmetric", "material": "alumina", "blocks": ["substrate"],
+        "clamps": ["right", "bottom"], "probes": [[0.0, -1e-9], [0.0, -10e-6]],
+        "heat": {"model": "fem-contact", "lateral": [[0.0, 0.3e-3]], "h_lateral": DX / 2},
+        "mesh": {"lo": [0.0, -0.26e-3], "hi": [1e-3, 0.0], "h_fine": DX,
+                 "h_coarse": 150e-6, "refine_radius": 0.15e-3, "cells": "tri"}},
+        heat={"laplacian": "cleary"})
+    sim, s = run(data, tmp_path)
+    assert s["status"] == "completed"
+    c = s["diagnostics"]["coupling"]
+    h = c["substrate_heat"]
+    assert abs(h["fluid_substrate_residual_rel"]) < 1e-10
+    assert abs(s["diagnostics"]["heat"]["energy_residual_rel"]) < 1e-12
+    assert h["heat_to_substrate_J"] > 0
+    assert 0.5 < h["heat_to_substrate_J"] / h["ideal_contact_heat_J"] < 1.5
+    assert h["impact_point_m"] == [0.0, 0.0]
+    assert c["peak_von_mises_Pa"] > 0 and c["peak_von_mises_t_s"] > c["t_contact_s"]
+    assert (tmp_path / "substrate" / "substrate.pvd").exists()
+    assert (tmp_path / "particles.pvd").exists()
