@@ -1,0 +1,193 @@
+"""Validation case ``droplet-impact``: the axisymmetric droplet job converged (issue 16).
+
+The scene is the packaged axisymmetric droplet impact (``sphfem/scenes/droplet_impact_
+axisymmetric.toml``: water D = 0.1 mm at 100 C onto alumina at 20 C, fluid + ring heat +
+fem-contact substrate heat + fem-axisymmetric stress), run at each impact speed V (c0 =
+10 V, so the Mach number and the steps per t_c stay fixed) at three or more spacings dx
+(every resolution length scaled together, :func:`sphfem.resolution.scaled_resolution`).
+For each speed the four figures a user reads are extracted from ``summary.json``:
+
+* ``spread``: the maximum spreading ratio D_max / D (the fluid module's contact diameter);
+* ``heat``: the heat into the substrate by the end time [J];
+* ``T_impact``: the impact point's surface temperature rise, time-averaged over the window
+  [t_contact + 0.1 t_c, t_contact + 2 t_c] [K];
+* ``vm_peak``: the peak von Mises stress in the substrate [Pa], with its time and place.
+
+Each figure gets an observed order, a Richardson limit and a GCI error bar
+(:mod:`sphfem.validation.richardson`).  Criteria (each can fail):
+
+* converged: the finest level lies within 10 % of the Richardson limit, the error bar
+  included (|f_h - f_0| + GCI |f_h| <= 0.1 |f_0|); an oscillatory or diverging sequence
+  gets a 3x-spread error bar and fails unless the spread is small;
+* contact temperature: at the finest level the impact-point rise stays within 10 % of the
+  rise of the ideal contact of two semi-infinite bodies, (e_f T_f + e_s T_s)/(e_f + e_s)
+  with e = sqrt(k rho c) (Carslaw & Jaeger 1959, sec. 2.15), over the window above (the
+  droplet's own thermal layer, sqrt(alpha_f t) <= 1.1 um over 4 t_c at 50 m/s, stays
+  inside the fluid above the stagnation point, so the ideal holds there);
+* conservation: heat lost by the fluid = heat gained by the substrate to 1e-9;
+* the maximum spreading is reached before the end (the run goes past it).
+
+Quick mode (``validate all --quick``, inside the test suite): 50 m/s only, D/dx = 12, 16,
+20 to 0.6 t_c: conservation and the contact temperature are gated, the Richardson figures
+reported (the spreading and stress have not settled by then).
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import tempfile
+from importlib import resources
+from pathlib import Path
+
+from sphfem.validation import CaseResult, Criterion, Run, Timer, register
+from sphfem.validation.richardson import richardson
+
+SCENE = "droplet_impact_axisymmetric.toml"
+#: impact speeds of the full case [m/s]
+SPEEDS = (10.0, 30.0, 50.0)
+#: particles across the droplet diameter, coarse to fine
+LEVELS_FULL = (16, 32, 64)
+LEVELS_QUICK = (12, 16, 20)
+#: end times in t_c (t_c = D / V from t = 0; contact is ~R / V later)
+T_END_FULL, T_END_QUICK = 4.0, 0.6
+#: window of the impact-point temperature, in t_c after contact
+T_WINDOW = (0.1, 2.0)
+TOL_CONVERGED = 0.10
+TOL_CONTACT = 0.10
+TOL_BALANCE = 1e-9
+
+FIGURES = {"spread": "max spreading D_max/D", "heat": "heat into substrate [J]",
+           "T_impact": "impact-point rise (window mean) [K]", "vm_peak": "peak von Mises [Pa]"}
+
+
+def base_scene():
+    """The packaged scene (a :class:`sphfem.scene.Scene`)."""
+    from sphfem.scene import parse_scene_toml
+
+    text = resources.files("sphfem").joinpath("scenes", SCENE).read_text()
+    return parse_scene_toml(text, source=f"sphfem/scenes/{SCENE}")
+
+
+def scene_at(speed: float, per_diameter: int, t_end_tc: float) -> dict:
+    """The scene dict at impact speed ``speed`` (c0 = 10 speed), ``per_diameter``
+    particles across the droplet, ending at ``t_end_tc`` t_c."""
+    from sphfem.resolution import scaled_resolution
+
+    sc = base_scene()
+    d0 = sc.to_dict()
+    drop = next(b for b in d0["blocks"] if b["kind"] == "fluid")
+    dx0 = drop.get("dx") or d0["sph"]["dx"]
+    d = scaled_resolution(sc, (2.0 * drop["radius"] / per_diameter) / dx0)
+    drop = next(b for b in d["blocks"] if b["kind"] == "fluid")
+    v = [0.0] * (len(drop["velocity"]) - 1) + [-float(speed)]
+    drop["velocity"] = v
+    d["materials"][drop["material"]]["c0"] = 10.0 * float(speed)
+    d["time"]["t_end"] = f"{t_end_tc} tc"
+    d["output"]["every"] = f"{t_end_tc / 4} tc"
+    d["scene"]["name"] = f"droplet_impact_axi_V{speed:g}_D{per_diameter}"
+    return d
+
+
+def figures(summary: dict, speed: float, diameter: float) -> dict:
+    """The four figures (module docstring) and their context from one run's summary."""
+    dg = summary["diagnostics"]
+    fl, cp = dg["fluid"], dg["coupling"]
+    sh = cp["substrate_heat"]
+    tc = diameter / speed
+    t_contact = cp.get("t_contact_s") or 0.0
+    T_s0, T_c = sh["substrate_initial_temperature_K"], sh["ideal_contact_temperature_K"]
+    lo, hi = t_contact + T_WINDOW[0] * tc, t_contact + T_WINDOW[1] * tc
+    win = [h for h in sh["history"] if lo <= h["t"] <= hi]
+    rises = [h["T_impact"] - T_s0 for h in win]
+    ideal = T_c - T_s0
+    sp = fl["spreading"]
+    return {
+        "spread": sp["max_ratio"], "spread_t_tc": sp["max_t_s"] / tc,
+        "heat": sh["heat_to_substrate_J"], "heat_ideal": sh["ideal_contact_heat_J"],
+        "T_impact": sum(rises) / len(rises) if rises else math.nan,
+        "T_impact_dev": max((abs(r / ideal - 1.0) for r in rises), default=math.nan),
+        "T_impact_samples": len(rises),
+        "vm_peak": cp["peak_von_mises_Pa"],
+        "vm_t_tc": (cp.get("peak_von_mises_t_after_contact_s") or math.nan) / tc,
+        "vm_r_m": cp["peak_von_mises_location_m"][0],
+        "vm_z_m": cp["peak_von_mises_location_m"][-1],
+        "balance": abs(sh.get("fluid_substrate_residual_rel", math.nan)),
+        "mass_kg": fl["mass_kg"], "t_end": summary["t"], "tc": tc,
+        "steps": summary["steps"], "particles": summary["particles"]["total"],
+        "wall_s": summary["wall_s"],
+    }
+
+
+def run_one(speed: float, per_diameter: int, t_end_tc: float, out: Path | None = None):
+    """Run one level; returns (figures, wall seconds)."""
+    from sphfem.api import run
+    from sphfem.scene import parse_scene
+
+    d = scene_at(speed, per_diameter, t_end_tc)
+    sc = parse_scene(d, source=f"droplet-impact V={speed:g} D/dx={per_diameter}")
+    drop = next(b for b in d["blocks"] if b["kind"] == "fluid")
+    with tempfile.TemporaryDirectory() as tmp:
+        folder = Path(out) if out is not None else Path(tmp) / "run"
+        with Timer() as t:
+            res = run(sc, folder, overwrite=True)
+        summary = json.loads((folder / "summary.json").read_text())
+        if res.status != "completed":
+            raise RuntimeError(f"droplet-impact V={speed:g} D/dx={per_diameter}: run "
+                               f"{res.status}: {summary.get('message')}")
+    return figures(summary, speed, 2.0 * drop["radius"]), t.s
+
+
+@register("droplet-impact")
+def droplet_impact(quick: bool) -> CaseResult:
+    """The axisymmetric droplet job at three spacings per speed (module docstring)."""
+    speeds = (50.0,) if quick else SPEEDS
+    levels = LEVELS_QUICK if quick else LEVELS_FULL
+    t_end = T_END_QUICK if quick else T_END_FULL
+    D = 2.0 * next(b for b in base_scene().to_dict()["blocks"] if b["kind"] == "fluid")["radius"]
+    runs: list[Run] = []
+    crit: dict[str, Criterion] = {}
+    notes: list[str] = []
+    for V in speeds:
+        figs = []
+        for n in levels:
+            f, wall = run_one(V, n, t_end)
+            figs.append(f)
+            runs.append(Run(f"{V:g} m/s", D / n, f["particles"], f["T_impact_dev"],
+                            f["T_impact_dev"], wall,
+                            {k: f[k] for k in ("spread", "heat", "T_impact", "vm_peak",
+                                               "vm_t_tc", "steps")}))
+        hs = [D / n for n in levels]
+        fin = figs[-1]
+        tag = f"{V:g} m/s"
+        crit[f"{tag} balance"] = Criterion(
+            f"{tag}: |heat lost by the fluid / heat gained by the substrate - 1| (all levels)",
+            max(f["balance"] for f in figs), TOL_BALANCE)
+        crit[f"{tag} contact T"] = Criterion(
+            f"{tag}, D/dx={levels[-1]}: max |impact-point rise / ideal contact rise - 1| over "
+            f"[{T_WINDOW[0]}, {T_WINDOW[1]}] t_c after contact", fin["T_impact_dev"],
+            TOL_CONTACT)
+        for key, label in FIGURES.items():
+            est = richardson(hs, [f[key] for f in figs])
+            rel = ((abs(est.finest - est.value) + est.error_bar) / abs(est.value)
+                   if est.value else math.inf)
+            order = f"{est.order:.2f}" if est.order is not None else "none"
+            notes.append(f"{tag} {label}: levels {[f'{f[key]:.4g}' for f in figs]}, order "
+                         f"{order}, limit {est.value:.4g} +- {est.error_bar:.2g}"
+                         f"{' (' + est.note + ')' if est.note else ''}")
+            if not quick:
+                crit[f"{tag} {key} converged"] = Criterion(
+                    f"{tag}: {label} at D/dx={levels[-1]} within {TOL_CONVERGED:.0%} of the "
+                    "Richardson limit, error bar included", rel, TOL_CONVERGED)
+        if not quick:
+            crit[f"{tag} spread max reached"] = Criterion(
+                f"{tag}: time of maximum spreading / end time (< 1: the run goes past it)",
+                fin["spread_t_tc"] * fin["tc"] / fin["t_end"], 0.98)
+        notes.append(f"{tag}: peak von Mises at D/dx={levels[-1]}: {fin['vm_peak'] / 1e6:.2f} "
+                     f"MPa at {fin['vm_t_tc']:.2f} t_c after contact, r = "
+                     f"{fin['vm_r_m'] * 1e6:.1f} um, z = {fin['vm_z_m'] * 1e6:.2f} um; heat "
+                     f"{fin['heat'] * 1e6:.3f} uJ = {fin['heat'] / fin['heat_ideal']:.3f} of the "
+                     "ideal contact over the run's wetted-area history")
+    return CaseResult("droplet-impact", runs, crit, notes, resolution_label="dx [m]",
+                      extra_columns={"spread": "D_max/D", "heat": "heat J",
+                                     "T_impact": "rise K", "vm_peak": "vM Pa"})
