@@ -245,3 +245,89 @@ def test_laplace_pressure_of_a_droplet_at_rest():
     p, v = _static(20, "lattice")
     assert p == pytest.approx(1.0, abs=0.03)
     assert v < 0.02
+
+
+def _oscillation(nr, eps=0.1, periods=1.6, R0=1e-3, sigma=0.072, rho0=1000.0):
+    """Droplet (arcs, R0 = 1 mm, water) started with Rayleigh's l = 2 velocity field of
+    amplitude V = eps omega R0; the shape moment D = <(z - z_c)^2 - r^2 / 2> (ring-mass
+    weighted: the 3D <z^2 - (x^2 + y^2)/2>) oscillates as sin(omega t); returns the period
+    (twice the mean spacing of its zero crossings) over Rayleigh's and D_min / D_max."""
+    from sphfem.validation.fluid import rayleigh_period
+
+    T = rayleigh_period(3, sigma, rho0, R0)
+    f = _droplet(nr, v_mode=eps * 2 * math.pi / T * R0, R0=R0, sigma=sigma, rho0=rho0,
+                 alpha=0.02)
+    ts, Ds = [0.0], [0.0]
+
+    def sample(s):
+        zc = np.average(s.x[:, 1], weights=s.M)
+        ts.append(s.t)
+        Ds.append(np.average((s.x[:, 1] - zc) ** 2 - 0.5 * s.x[:, 0] ** 2, weights=s.M))
+
+    _run(f, periods * T, T / 100, sample, sigma)
+    t, D = np.array(ts), np.array(Ds)
+    k = np.flatnonzero(D[1:-1] * D[2:] < 0) + 1
+    z = t[k] - D[k] * (t[k + 1] - t[k]) / (D[k + 1] - D[k])
+    assert len(z) >= 2
+    return 2 * float(np.mean(np.diff(z))) / T, D.min() / D.max()
+
+
+def test_rayleigh_oscillation_of_a_droplet():
+    """l = 2 oscillation (eps = 0.1, R0/dx = 10, water, alpha = 0.02): the period within 2 %
+    of Rayleigh's 2 pi / sqrt(8 sigma / (rho R0^3)) (measured -0.50 %; slow test: finer
+    spacings), and the shape passes through the sphere to the other side (D_min / D_max <
+    -0.5)."""
+    ratio, dmin = _oscillation(10)
+    assert ratio == pytest.approx(1.0, abs=0.02)
+    assert dmin < -0.5
+
+
+@pytest.mark.slow
+def test_rayleigh_oscillation_convergence():
+    """As above at R0/dx = 10, 20, 40: |T / T_Rayleigh - 1| = 0.50, 0.59, ... % (measured):
+    within 1.5 % at every spacing; the error does not fall with dx at these spacings (see
+    the module report in the issue note: it is not the spatial discretisation)."""
+    errs = [abs(_oscillation(nr)[0] - 1.0) for nr in (10, 20, 40)]
+    assert max(errs) < 0.015, errs
+
+
+def test_droplet_impact_with_surface_tension_stays_calm():
+    """The impact of tests/test_fluid_axisymmetric.py (D = 0.1 mm at 10 m/s onto an Adami
+    wall, D/dx = 16, c0 = 100 m/s, fixed h) with water's sigma = 0.072 N/m (We = 139) to
+    1 t_c: after the water-hammer transient (t >= 0.4 t_c) |p| < 5 rho V^2 as without
+    surface tension (measured [-0.75, 1.52] rho V^2 with sigma, [-0.72, 1.56] without; to
+    2 t_c [-4.1, 4.7] and [-4.0, 5.2]), and the CSF acceleration 2 sigma |kbar g| / rho stays
+    below the inertial scale V^2 / dx (measured max 0.076 V^2 / dx).  With the
+    crosscheck's adaptive h and free-slip wall ghost the pressure peaks are -10 / +23 rho V^2
+    by 1 t_c with or without surface tension (a fluid matter, not tested here)."""
+    import sys
+    from pathlib import Path
+
+    from sphfem.axisymmetric import ring_mass
+    from sphfem.fluid.axisymmetric import AxisymmetricFluid
+    from sphfem.particles import WALL
+
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "examples" / "axisymmetric"))
+    import droplet_crosscheck as dc
+
+    dx = dc.D / 16
+    xf, xw = dc.lattice_sphere(dx, 2), dc.wall(dx, 2, 3 * dc.D)
+    x = np.vstack([xf, xw])
+    nf = len(xf)
+    kind = np.r_[np.full(nf, FLUID), np.full(len(xw), WALL)].astype(np.int8)
+    v = np.zeros_like(x)
+    v[:nf, 1] = -dc.V
+    M = np.r_[ring_mass(xf[:, 0], dc.RHO, dx * dx), np.zeros(len(xw))]
+    f = AxisymmetricFluid(x, v, np.full(len(x), dc.RHO), kind, M, dx * dx, 3 * dx,
+                          dc.params(), surface_tension=0.072)
+    lo, hi, a_st = math.inf, -math.inf, 0.0
+    while f.t < dc.T_C:
+        f.step(f.stable_dt())
+        st = f.csf.state
+        a_st = max(a_st, float((2 * 0.072 * np.abs(st.kbar[:nf]) * np.hypot(*st.g[:nf].T)
+                                / f.rho[:nf]).max()))
+        if f.t >= 0.4 * dc.T_C:
+            lo, hi = min(lo, f.p[:nf].min()), max(hi, f.p[:nf].max())
+    q = dc.RHO * dc.V**2
+    assert -5.0 * q < lo and hi < 5.0 * q
+    assert 0.0 < a_st < dc.V**2 / dx
