@@ -287,6 +287,8 @@ class FluidSolver:
         #: pass (False: over the full filtered Verlet list; same results, for tests)
         self.compact_rows = True
         self._st_state = None  # work arrays of the surface-tension method
+        #: a pressure-projection method's state between steps (its ``solve`` returns it)
+        self.pressure_state = None
         if ctx is None:  # stand-alone: the fluid's own context and list service
             ctx = standalone_context(particles, self.R, self.sigma, self.kernel_code, kernel,
                                      self.lo, self.hi, self.period, self.params, self.wall,
@@ -384,13 +386,20 @@ class FluidSolver:
 
     def evaluate(self, t: float | None = None) -> None:
         """Pressures, wall states, density gradient, accelerations and density rates at the
-        current positions (``t``: time of the evaluation, for the body-force ramp)."""
+        current positions (``t``: time of the evaluation, for the body-force ramp).  Under a
+        pressure-projection method (:mod:`sphfem.fluid.pressure`, ``eos`` False) the forces
+        are those without pressure and ``p`` keeps the method's values."""
         t0 = time.perf_counter()
         p, s, pa, nl = self.p, self._scratch, self.params, self.nbrs
         g = self.body_force(self.t if t is None else t)
+        eos = self.pressure_method.eos  # False: a projection method owns p (no pressure here)
+        p_own = None if eos else p.p.copy()
         passes.prepare_fluid(p.rho, p.m, p.v, p.kind, pa.rho0, self.B, pa.gamma, p.p, s.vg)
         self.wall_method.wall_state(self, g)  # the registered wall model
         passes.prepare_all(p.rho, p.p, p.m, p.vol, p.kind, s.pr, s.V, s.meff, s.isf)
+        if not eos:  # forces without pressure: p / rho^2 = 0 in the pass, p stays the method's
+            s.pr[:] = 0.0
+            p.p[:] = p_own
         delta_coef = pa.delta * self.h * pa.c0
         nb, cnt = self._nb, s.cnt  # in-range rows (fluid-owned buffer, shared list untouched)
         if delta_coef > 0 or pa.shifting != "none":
