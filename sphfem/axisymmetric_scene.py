@@ -238,6 +238,11 @@ class AxisymmetricFluidModule(PhysicsModule):
         self._walls = wl
         self._wall_tree = cKDTree(x[wl]) if wl.size else None
         self.correction_impulse = 0.0
+        # h_i ~ sqrt(A_i / a_ref): a_ref the lattice's meridian area dx^2 (the median of the
+        # areas at t = 0), not the median at this init, so a resumed run takes the same
+        dxf = [b.dx or self.scene.sph.dx for b in self.scene.blocks if b.kind == "fluid"]
+        self.solver.a_ref = float(dxf[0]) ** 2
+        self.solver.evaluate()
         self.solver.t = ctx.t
         self.solver.step_count = ctx.step
         self.fl = kind == FLUID
