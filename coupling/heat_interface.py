@@ -78,13 +78,19 @@ F_a dt, is removed from the particles with the weights (2):
 (sum_i w_ai = 1 on every wetted node; dry nodes exchange nothing), so the heat the fluid
 loses equals the heat the substrate gains to round-off.
 
-Wetting: node a is wetted while the contact layer's footprints cover at least
-``wet_fraction`` (1/2) of it, sum_i B_ai >= wet_fraction A_a: the node lies inside the
-footprints' union (for a straight edge through a node the cover is exactly 1/2), so the
-wetted area is the union's area to the lumping of the surface nodes.  Its error against
-the fluid's true contact area: a contact line that meets the wall steeply is placed to
-within the rounding of the edge to a lattice cell and a node (zero mean; second order
-in the heat over a spreading history, tests/test_heat_interface_wetting.py), a free
+Wetting: node a becomes wetted when the contact layer's footprints cover at least
+``wet_fraction`` (1/2) of it, sum_i B_ai >= wet_fraction A_a, and stays wetted while
+the layer taken within ``stay_gap`` (2) cells covers any of it (a wetted node then
+samples that layer).  The hysteresis keeps the layer's age where the SPH fluid lifts
+off the wall for a moment: in the droplet job the lowest fluid under the impact point
+rises to a gap of 1.1 dx at 0.8-0.9 us and returns (without it the node dried, its age
+restarted and the surface overshot the contact temperature by 5 K).  A node enters when
+it lies inside the footprints' union (for a straight edge through a node the cover is
+exactly 1/2), so the wetted area is the union's area to the lumping of the surface
+nodes.  Its error against the fluid's true contact area: a contact line that meets the
+wall steeply is placed to within the rounding of the edge to a lattice cell and a node
+(zero mean; order 3/2 in the heat over a spreading history, limited by the last cell
+wetted, where sqrt(t - t_w) is not smooth: tests/test_heat_interface_wetting.py), a free
 surface that approaches the wall at a glancing angle (an impacting droplet's first
 contact) is counted from the time it comes within g h of the wall, early by at most
 g h / v (first order).  t_w counts from the wetting time: the start of the first step
@@ -168,7 +174,8 @@ class ContactHeatInterface:
     def __init__(self, substrate, k_f: float, rho_f: float, c_f: float,
                  axis: int = -1, level: float | None = None,
                  side: int = 1, wet_fraction: float = 0.5, period=None, lo=None,
-                 n_gauss: int = 4, wetting: str = "contact-layer", contact_gap: float = 1.0):
+                 n_gauss: int = 4, wetting: str = "contact-layer", contact_gap: float = 1.0,
+                 stay_gap: float = 2.0):
         self.sub = substrate
         self.k_f, self.rho_f, self.c_f = float(k_f), float(rho_f), float(c_f)
         self.alpha_f = self.k_f / (self.rho_f * self.c_f)
@@ -186,6 +193,7 @@ class ContactHeatInterface:
                              f"got {wetting!r}")
         self.wetting = wetting
         self.contact_gap = float(contact_gap)
+        self.stay_gap = max(float(stay_gap), self.contact_gap)
         self.period = (np.zeros(self.dim) if period is None
                        else np.broadcast_to(np.asarray(period, float), (self.dim,)).copy())
         self.lo = (np.zeros(self.dim) if lo is None
@@ -207,12 +215,15 @@ class ContactHeatInterface:
         self._cache = None
 
     # -- sampling -----------------------------------------------------------------------
-    def weights(self, x, vol, h=None):
+    def weights(self, x, vol, h=None, was_wet=None):
         """Sampling / removal weights (2) of the particles ``x`` (n, dim) with volumes
-        ``vol`` and sizes ``h`` (default V^(1/dim)).
+        ``vol`` and sizes ``h`` (default V^(1/dim)); ``was_wet`` (surface nodes) the
+        nodes wetted before, which stay wetted while the layer within ``stay_gap`` cells
+        covers any of them ("Wetting" in the module docstring; None: no history).
 
         Returns ``(rows, cols, w, wet, z, h)``: rows the surface node, cols the particle,
-        ``w`` = B_ai / sum_j B_aj over each wetted node (module docstring, eq. 2)."""
+        ``w`` = B_ai / sum_j B_aj over each wetted node (module docstring, eq. 2); ``z``
+        the distances read by the closure (contact-layer cells at h/2)."""
         import scipy.sparse as sp
 
         x = np.atleast_2d(np.asarray(x, float))
@@ -226,7 +237,10 @@ class ContactHeatInterface:
             chi = np.clip(2.0 - 2.0 * np.maximum(z, 0.0) / h, 0.0, 1.0)
             near = np.flatnonzero((z > -0.5 * h) & (chi > 0.0))  # the wall layer
         else:  # the contact layer (eq. 2), its cells read as adjacent to the wall
-            near = np.flatnonzero(self.contact_layer(x, z, h))
+            held = was_wet is not None and bool(np.any(was_wet))
+            layer = self.contact_layer(x, z, h, self.stay_gap if held else None)
+            enter = layer & (z - 0.5 * h < self.contact_gap * h)
+            near = np.flatnonzero(layer)
             chi = np.ones(n)
             z = z.copy()
             z[near] = 0.5 * h[near]
@@ -265,21 +279,31 @@ class ContactHeatInterface:
         B = sp.coo_matrix((N.data * meas[N.row], (N.col, part[N.row])),
                           shape=(nX, n)).tocsr()
         B.sum_duplicates()
-        cover = np.asarray(B.sum(axis=1)).ravel()
-        wet = cover >= self.wet_fraction * self.sub.surface_area
         Bc = B.tocoo()
-        keep = wet[Bc.row] & (Bc.data > 0)
+        if self.wetting == "chi":
+            use = np.ones(Bc.nnz, bool)
+            cover = np.asarray(B.sum(axis=1)).ravel()
+            wet = cover >= self.wet_fraction * self.sub.surface_area
+        else:  # new nodes by the layer within contact_gap; wetted ones held by stay_gap
+            old = np.zeros(nX, bool) if was_wet is None else np.asarray(was_wet, bool)
+            use = old[Bc.row] | enter[Bc.col]
+            cover_in = np.bincount(Bc.row, weights=Bc.data * enter[Bc.col], minlength=nX)
+            cover = np.bincount(Bc.row, weights=Bc.data * use, minlength=nX)
+            wet = (cover_in >= self.wet_fraction * self.sub.surface_area) | (old & (cover > 0))
+            cover = np.where(old, cover, cover_in)
+        keep = wet[Bc.row] & (Bc.data > 0) & use
         rows, cols = Bc.row[keep], Bc.col[keep]
         w = Bc.data[keep] / cover[rows]
         return rows, cols, w, wet, z, h
 
-    def contact_layer(self, x, z, h) -> np.ndarray:
+    def contact_layer(self, x, z, h, gap=None) -> np.ndarray:
         """Mask of the contact layer (module docstring, eq. 2) among the particles ``x``
         (n, dim) at distances ``z`` from the wall with sizes ``h``: lower face within
-        ``contact_gap`` h of the wall (centre above -h/2) and less than half the footprint
-        over cells lying at least half a cell lower."""
+        ``gap`` (default ``contact_gap``) h of the wall (centre above -h/2) and less than
+        half the footprint over cells lying at least half a cell lower."""
         n = len(z)
-        band = (z > -0.5 * h) & (z - 0.5 * h < self.contact_gap * h)
+        gap = self.contact_gap if gap is None else gap
+        band = (z > -0.5 * h) & (z - 0.5 * h < gap * h)
         cand = np.flatnonzero(band)
         if cand.size < 2:
             return band
@@ -338,8 +362,9 @@ class ContactHeatInterface:
         whose temperature it advances (one :meth:`TransientHeat.step`).  Returns the heat
         each particle loses [J] (eq. 5): apply it as T_i -= dE_i / (m_i c_i)."""
         T = np.asarray(T, float)
+        was_wet = ~np.isnan(self.t_wet)
         key = (np.array(x, float, copy=True), np.array(vol, float, ndmin=1, copy=True),
-               None if h is None else np.array(h, float, ndmin=1, copy=True))
+               None if h is None else np.array(h, float, ndmin=1, copy=True), was_wet)
         c = self._cache
         if c is not None and all(
                 (a is None and b is None) or (a is not None and b is not None
@@ -347,7 +372,7 @@ class ContactHeatInterface:
                 for a, b in zip(key, c[0], strict=True)):
             rows, cols, w, wet, z, hh = c[1]  # particles unchanged: the same weights
         else:
-            rows, cols, w, wet, z, hh = self.weights(x, vol, h)
+            rows, cols, w, wet, z, hh = self.weights(x, vol, h, was_wet)
             self._cache = (key, (rows, cols, w, wet, z, hh))
         nX = self.X.shape[0]
         newly = wet & np.isnan(self.t_wet)

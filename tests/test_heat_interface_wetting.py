@@ -163,3 +163,39 @@ def test_spreading_contact_heat_converges(geom, gap):
     assert np.all(np.diff(errs) < 0), errs
     assert order >= 1.2, (errs, order)
     assert errs[-1] < 0.01, errs
+
+
+def test_wetted_nodes_hold_while_the_layer_lifts_off():
+    """A layer wetted at a gap of 0.2 dx that lifts to 1.3 dx for a step (as the fluid
+    under the droplet job's impact point does) keeps its nodes wetted, sampled and dated
+    from the first wetting; lifted beyond ``stay_gap`` (2.4 dx) or moved off laterally,
+    the nodes dry.  A fresh layer at 1.3 dx does not wet (it enters within one cell)."""
+    dx, dt = 1e-6, 1e-9
+    width = 12 * dx
+    sub = _surface("planar", width, 0.5 * dx)
+    itf = ContactHeatInterface(sub, *WATER)
+
+    def layer(gap, shift=0.0):
+        x, vol, _ = _layers("planar", dx, 6 * dx, width, 2, gap * dx)
+        x[:, 0] += shift
+        return x, vol
+
+    def step(gap, shift=0.0):
+        x, vol = layer(gap, shift)
+        itf.step(x, np.full(len(x), TF), vol, dt, h=np.full(len(x), dx))
+        return ~np.isnan(itf.t_wet)
+
+    fresh = ContactHeatInterface(sub, *WATER)
+    x, vol = layer(1.3)
+    assert not fresh.weights(x, vol, np.full(len(x), dx))[3].any()
+    wet0 = step(0.2)
+    t0 = itf.t_wet[wet0].copy()
+    assert wet0.sum() > 0
+    for gap in (1.3, 0.2, 1.3):
+        assert np.array_equal(step(gap), wet0)
+        assert np.array_equal(itf.t_wet[wet0], t0)
+        assert itf.last["heat"][wet0].min() > 0.0
+    assert not step(2.4).any()
+    step(0.2)
+    moved = step(1.3, shift=3 * dx)  # the layer slides away: its old edge dries
+    assert moved.sum() > 0 and not moved[itf.X[:, 0] < 2.5 * dx].any()
