@@ -193,6 +193,9 @@ class AxisymmetricFluidModule(PhysicsModule):
 
     name = "fluid"
     moves_particles = False  # it moves the fluid, but with its own list (module docstring)
+    #: a ring deeper than this [dx] below the wall top has entered the second wall layer:
+    #: its time is reported (``t_wall_breach_s``); one below the wall stops the run
+    BREACH_DX = 2.0
     #: the kinematic no-penetration correction of the position update (module docstring);
     #: off: in the droplet job at dx = 6.25 um it stopped the run earlier (a ring through
     #: the wall at 3.5 us with it, a ring out at 5.4 us without; issue 16 note)
@@ -215,6 +218,8 @@ class AxisymmetricFluidModule(PhysicsModule):
         #: budget and the spread history cover the process that started at t = 0 only)
         self.mom0, self.impulse, self.t0 = None, 0.0, 0.0
         self.max_depth = -math.inf
+        #: first time a fluid ring lay more than BREACH_DX below the wall top (None: never)
+        self.t_breach = None
 
     def fields(self):
         f = np.float64
@@ -246,9 +251,13 @@ class AxisymmetricFluidModule(PhysicsModule):
         self.solver.t = ctx.t
         self.solver.step_count = ctx.step
         self.fl = kind == FLUID
-        walls = ps.x[ps.kind == WALL]
+        # the floor: the wall particles whose exposed face is a top face (normal +e_z)
+        floor = np.zeros(len(x), bool) if nrm is None else (kind == WALL) & (nrm[:, 1] > 0.5)
+        walls = x[floor]
         self.dx = float(self.scene.sph.dx)
         self.wall_top = float(walls[:, 1].max()) + 0.5 * self.dx if len(walls) else None
+        self.wall_depth = (float(walls[:, 1].max() - walls[:, 1].min()) / self.dx + 1.0
+                           if len(walls) else None)
         self.D0 = 2.0 * max((b.radius for b in self.scene.blocks
                              if b.kind == "fluid" and b.shape == "sphere"), default=0.0)
         if ctx.step == 0:
@@ -289,13 +298,23 @@ class AxisymmetricFluidModule(PhysicsModule):
                                     "top)") from None
         self._write_back(ctx)
         self._correction_forces(ctx, v_n, dt)
-        self.max_depth = max(self.max_depth, self._depth(s))
+        depth = self._depth(s)
+        self.max_depth = max(self.max_depth, depth)
+        if depth > self.BREACH_DX and self.t_breach is None:
+            self.t_breach = ctx.t + dt
+            logger.warning("axisymmetric fluid: a ring %.2f dx below the wall top at t = %g s "
+                           "(the figures after it are suspect)", depth, ctx.t + dt)
+        if self.wall_depth is not None and depth > self.wall_depth:
+            raise SimulationStopped(f"axisymmetric fluid at t = {ctx.t + dt:.4g} s: a ring "
+                                    f"went through the wall ({depth:.2f} dx below its top, "
+                                    f"the wall is {self.wall_depth:.2f} dx thick)")
         self.impulse += dt * float(ctx.particles.f_fluid[:, 1].sum())
         if self.wall_top is not None and self.D0 > 0:
             self.spread.append([ctx.t + dt, self.contact_diameter(ctx.particles)])
 
     def _depth(self, s) -> float:
-        """How far the lowest fluid ring lies below the wall top [dx] (<= 0: above)."""
+        """How far the lowest fluid ring lies below the floor's top [dx] (<= 0: above; the
+        floor: the wall particles whose exposed face is a top face)."""
         if self.wall_top is None:
             return 0.0
         return float((self.wall_top - s.x[self.fl, 1].min()) / self.dx)
@@ -362,6 +381,7 @@ class AxisymmetricFluidModule(PhysicsModule):
              "no_penetration_axial_impulse_N_s": self.correction_impulse,
              "no_penetration_corrections": int(s.penetration_corrections),
              "max_ring_depth_below_wall_top_dx": self.max_depth,
+             "t_wall_breach_s": self.t_breach,
              "axial_momentum_residual_rel": self.momentum_residual(ps),
              "wall_s": dict(s.wall_s), "steps": s.step_count}
         if self.D0 > 0 and len(sp):

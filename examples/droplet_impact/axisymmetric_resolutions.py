@@ -37,8 +37,10 @@ def scaled_scene(dx: float, t_end: str) -> dict:
     return data
 
 
-def figures(summary: dict) -> dict:
-    """The run's figures under their summary.json names (None where absent)."""
+def figures(summary: dict, folder: Path | None = None) -> dict:
+    """The run's figures under their summary.json names (None where absent), and the peak
+    von Mises and spreading before ``t_wall_breach_s`` (a fluid ring in the second wall
+    layer; the stress after it is not the droplet's), from ``folder``'s substrate history."""
     d = summary["diagnostics"]
     c = d.get("coupling", {})
     h = c.get("substrate_heat", {})
@@ -72,7 +74,32 @@ def figures(summary: dict) -> dict:
         "spread_max_ratio": sp.get("max_ratio"), "spread_max_t_s": sp.get("max_t_s"),
         "axial_momentum_residual_rel": f.get("axial_momentum_residual_rel"),
         "max_ring_depth_below_wall_top_dx": f.get("max_ring_depth_below_wall_top_dx"),
+        "t_wall_breach_s": f.get("t_wall_breach_s"),
+        **before_breach(summary, folder),
     }
+
+
+def before_breach(summary: dict, folder: Path | None) -> dict:
+    f = summary["diagnostics"].get("fluid", {})
+    tb = f.get("t_wall_breach_s")
+    tb = math.inf if tb is None else tb
+    out = {}
+    hist_path = None if folder is None else folder / "substrate" / "history.json"
+    if hist_path is not None and hist_path.exists():
+        rows = [r for r in json.loads(hist_path.read_text())["history"] if r["t"] < tb]
+        if rows:
+            r = max(rows, key=lambda r: r["peak_von_mises"])
+            out.update(peak_von_mises_before_breach_Pa=r["peak_von_mises"],
+                       peak_von_mises_before_breach_t_s=r["t"],
+                       peak_von_mises_before_breach_location_m=r["peak_location"])
+    sp = f.get("spreading", {})
+    if sp:
+        pairs = [(t, b) for t, b in zip(sp["history_t_s"], sp["history_ratio"], strict=True)
+                 if t < tb]
+        if pairs:
+            t, b = max(pairs, key=lambda p: p[1])
+            out.update(spread_max_ratio_before_breach=b, spread_max_before_breach_t_s=t)
+    return out
 
 
 def run_one(dx: float, t_end: str, out: Path) -> dict:
@@ -87,7 +114,7 @@ def run_one(dx: float, t_end: str, out: Path) -> dict:
         sim.run(folder, progress=False)
     except SimulationStopped:
         pass  # summary.json holds the figures up to the stop
-    fig = figures(json.loads((folder / "summary.json").read_text()))
+    fig = figures(json.loads((folder / "summary.json").read_text()), folder)
     fig["process_wall_s"] = time.perf_counter() - t0
     return fig
 
@@ -95,7 +122,8 @@ def run_one(dx: float, t_end: str, out: Path) -> dict:
 def table(figs: list[dict]) -> str:
     tc = 2e-6
     rows = ["dx um | status (t/tc) | steps | wall s | vM MPa (t/tc, r um, z um) | T_imp max C "
-            "(t/tc) | Q 1tc / 2tc / end uJ (ideal end) | spread max (t/tc)"]
+            "(t/tc) | Q 1tc / 2tc / end uJ (ideal end) | spread max (t/tc) | breach t/tc | "
+            "vM before breach MPa (t/tc)"]
     for f in figs:
         loc = f["peak_von_mises_location_m"] or [math.nan, math.nan]
         g = lambda v, s=1.0: math.nan if v is None else v * s  # noqa: E731
@@ -107,7 +135,10 @@ def table(figs: list[dict]) -> str:
             f"{g(f['heat_to_substrate_at_1tc_J'], 1e6):.3g} / "
             f"{g(f['heat_to_substrate_at_2tc_J'], 1e6):.3g} / "
             f"{g(f['heat_to_substrate_J'], 1e6):.3g} ({g(f['ideal_contact_heat_J'], 1e6):.3g}) | "
-            f"{g(f['spread_max_ratio']):.3g} ({g(f['spread_max_t_s'], 1 / tc):.2f})")
+            f"{g(f['spread_max_ratio']):.3g} ({g(f['spread_max_t_s'], 1 / tc):.2f}) | "
+            f"{g(f['t_wall_breach_s'], 1 / tc):.2f} | "
+            f"{g(f.get('peak_von_mises_before_breach_Pa'), 1e-6):.3g} "
+            f"({g(f.get('peak_von_mises_before_breach_t_s'), 1 / tc):.2f})")
     return "\n".join(rows)
 
 
