@@ -263,26 +263,11 @@ class AxisymmetricResult(FEMResult):
         nodal sums; the z component is the net axial force on the body."""
         return TWO_PI * super().reaction(group)
 
-    def probe(self, points) -> dict:
-        """``u`` (n, 2), ``stress`` (n, 3, 3) in (r, z, theta) order, ``von_mises`` and
-        ``dT`` at points (n, 2) = (r, z) inside the mesh (stress from the displacement
-        gradient; on the axis e_tt = du_r/dr)."""
+    def _stress_at(self, grad, u, X, dT) -> np.ndarray:
+        """Stress (3, 3, n) in (r, z, theta) order at the (r, z) points X of ``probe``
+        (on the axis e_tt = du_r/dr)."""
         s = self.substrate
-        X = np.atleast_2d(np.asarray(points, float)).T
-        cells, pts = s._locate(X)
-        b = s.basis
-        n = X.shape[1]
-        u = np.zeros((2, n))
-        grad = np.zeros((2, 2, n))
-        for k in range(b.Nbfun):
-            phi = b.elem.gbasis(b.mapping, pts, k, tind=cells)[0]
-            coef = self.dofs[b.element_dofs[k, cells]]
-            u += np.asarray(phi)[..., 0] * coef
-            grad += phi.grad[..., 0] * coef
-        dT = s._dT_at(self.dT_spec, X)
-        S = axisymmetric_stress(s.lam, s.mu, s.alpha, grad, u[0], X[0], dT, s._r_axis)
-        return {"u": u.T, "stress": np.moveaxis(S, -1, 0), "von_mises": forms.von_mises(S),
-                "dT": dT}
+        return axisymmetric_stress(s.lam, s.mu, s.alpha, grad, u[0], X[0], dT, s._r_axis)
 
 
 # ----------------------------------------------------------------------------- substrate

@@ -251,9 +251,15 @@ class FEMResult:
             u += np.asarray(phi)[..., 0] * coef
             grad += phi.grad[..., 0] * coef
         dT = s._dT_at(self.dT_spec, X)
-        S = forms.thermo_elastic_stress(s.lam, s.mu, s.alpha, grad, dT)
+        S = self._stress_at(grad, u, X, dT)
         return {"u": u.T, "stress": np.moveaxis(S, -1, 0), "von_mises": forms.von_mises(S),
                 "dT": dT}
+
+    def _stress_at(self, grad, u, X, dT) -> np.ndarray:
+        """Cauchy stress (3, 3, n) from the displacement gradient (dim, dim, n), the
+        displacement (dim, n) and dT (n,) at the points X (dim, n)."""
+        s = self.substrate
+        return forms.thermo_elastic_stress(s.lam, s.mu, s.alpha, grad, dT)
 
 
 class FEMSubstrate(QuasiStaticSubstrate):
