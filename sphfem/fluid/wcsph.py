@@ -65,7 +65,6 @@ from sphfem.schema.params import check_declared, section_dataclass
 
 logger = logging.getLogger(__name__)
 
-FASTMATH = passes.FASTMATH
 
 #: below this many particles the automatic thread choice runs the passes on one thread
 SERIAL_BELOW = 20_000

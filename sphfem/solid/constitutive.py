@@ -26,7 +26,7 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from sphfem.operators import FASTMATH
+from sphfem.kernels import FASTMATH
 
 
 @njit(cache=True, fastmath=FASTMATH)

@@ -29,8 +29,8 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
+from sphfem.kernels import FASTMATH
 from sphfem.neighbors import min_image
-from sphfem.operators import FASTMATH
 
 
 @njit(cache=True, fastmath=FASTMATH)
