@@ -40,6 +40,7 @@ import numpy as np
 from sphfem.errors import SimulationStopped
 from sphfem.particles import SOLID
 from sphfem.physics import PhysicsModule
+from sphfem.solid.scene_section import body_blocks
 
 _AXES = "xyz"
 
@@ -91,8 +92,7 @@ class TLSPHModule(PhysicsModule):
 
         sc, cfg = self.scene, self.cfg
         ps = ctx.particles
-        self.block_names = (list(cfg.blocks) if cfg.blocks is not None else
-                            [b.name for b in sc.blocks if b.kind == "solid"])
+        self.block_names = body_blocks(cfg.blocks, sc.blocks)
         members = self._block_members(ps)
         fresh = not np.any(ps.tl_id > 0)
         if fresh:

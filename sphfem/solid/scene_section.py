@@ -60,6 +60,12 @@ BOUNDARY = Section("boundaries", (
    "those of the `heat` module (`[[heat.boundaries]]`).")
 
 
+def body_blocks(named, blocks) -> list[str]:
+    """The names of the body's blocks: ``[tlsph] blocks`` as ``named``, or (None) every
+    block of kind "solid" among ``blocks``, in scene order."""
+    return list(named) if named is not None else [b.name for b in blocks if b.kind == "solid"]
+
+
 def _check(rec, ctx, path):
     core = ctx.core
     dim = ctx.dim
@@ -67,8 +73,7 @@ def _check(rec, ctx, path):
         ctx.error("scene.dim", "the tlsph module needs a 2D (plane strain) or 3D scene")
     blocks = {b.name: b for b in core.get("blocks", ())}
     mats = core.get("materials", {})
-    names = rec.blocks if rec.blocks is not None else [
-        b.name for b in blocks.values() if b.kind == "solid"]
+    names = body_blocks(rec.blocks, blocks.values())
     if not names:
         ctx.error(f"{path}.blocks", "no block of kind \"solid\": the tlsph module needs one "
                                     "(or name the body's blocks in tlsph.blocks)")
