@@ -119,8 +119,8 @@ class TLSPHResult:
         P = np.atleast_2d(np.asarray(points, float))
         X = s.X
         R = s.body.ref.R
-        kind = kernels.kernel_code("wendland_c2")
-        sigma = kernels.kernel_sigma(kind, s.dim, R)
+        kernel_code = kernels.kernel_code("wendland_c2")  # the body's kernel
+        sigma = kernels.kernel_sigma(kernel_code, s.dim, R)
         idx = s._tree.query_ball_point(P, R)
         out_u = np.zeros((len(P), s.dim))
         out_s = np.zeros((len(P), 3, 3))
@@ -131,7 +131,7 @@ class TLSPHResult:
                 raise ValueError(f"probe: point {P[q]} is farther than R = {R:g} from the "
                                  "TL-SPH body")
             r = np.linalg.norm(X[nb] - P[q], axis=1)
-            w = s.vol[nb] * sigma * np.array([kernels.kernel_f(v / R, kind) for v in r])
+            w = s.vol[nb] * sigma * np.array([kernels.kernel_f(v / R, kernel_code) for v in r])
             w /= w.sum()
             out_u[q] = w @ self.u[nb]
             out_s[q] = np.einsum("n,nij->ij", w, self.stress[nb])
