@@ -25,8 +25,9 @@ with the scene's wall particles as its Adami walls (free-slip ghost of the wall 
 continuity, normals from the nearest face of each wall box; Shepard-averaged hoop term;
 h ~ sqrt(A) as in ``examples/axisymmetric/droplet_crosscheck.py``); the kinematic
 no-penetration correction of :mod:`sphfem.fluid.no_penetration` (rings that crossed the
-wall surface are put back on it and lose their inward normal velocity) is available
-(``AxisymmetricFluidModule.no_penetration``) and off by default.  The force of the fluid
+wall surface are put back on it and lose their inward normal velocity) is on
+(``AxisymmetricFluidModule.no_penetration``: without it the droplet job fails at
+D/dx >= 32).  The force of the fluid
 on each wall particle (``f_fluid``, the coupling's sensors) is the ring force
 
     F_w = - sum_i M_i a_(i<-w)                                                           (1)
@@ -196,10 +197,12 @@ class AxisymmetricFluidModule(PhysicsModule):
     #: a ring deeper than this [dx] below the wall top has entered the second wall layer:
     #: its time is reported (``t_wall_breach_s``); one below the wall stops the run
     BREACH_DX = 2.0
-    #: the kinematic no-penetration correction of the position update (module docstring);
-    #: off: in the droplet job at dx = 6.25 um it stopped the run earlier (a ring through
-    #: the wall at 3.5 us with it, a ring out at 5.4 us without; issue 16 note)
-    no_penetration = False
+    #: the kinematic no-penetration correction of the position update (module docstring).
+    #: Droplet job (50 m/s, 4 tc) without it: rings sink into the wall layers, a ring more
+    #: than 2 dx deep at 3.75 / 0.74 / 0.35 tc for dx = 6.25 / 3.125 / 1.5625 um and through
+    #: the wall soon after; with it at 3.125 um: to 4 tc, no ring below the wall top, the
+    #: axial momentum budget closed to 0.6 %
+    no_penetration = True
 
     def __init__(self, scene):
         from sphfem.fluid.wcsph import params_from_scene
