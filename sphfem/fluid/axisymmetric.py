@@ -65,9 +65,18 @@ terms), ``wall_normals`` (the continuity's divergence sees the free-slip ghost o
 :meth:`_divergence_velocity`; with the wall's own velocity 0 the normal compression at the
 wall is underestimated and rings sink into the wall layers).  Status (issue 16): with all
 three the droplet impact follows the 3D run at equal spacing to within 3-13 % in spread
-diameter (examples/axisymmetric/droplet_crosscheck.py).  NOT yet robust: at D/dx = 32 the
-same run loses one ring at ~1.3 t_c (ejected at 18 V from the contact line, where rings
-sink up to 2.6 dx into the wall layers); wall penetration is the open problem.  Also
+diameter (examples/axisymmetric/droplet_crosscheck.py).  NOT yet robust at fine spacing
+(examples/axisymmetric/impact_robustness.py, 10 m/s, c0 = 10 V).  Two causes found at
+D/dx = 32: (a) the lamella tip's negative pressure, copied onto the wall by the Adami
+extrapolation, pulls contact-line rings into the wall (-1 V^2/dx at 0.25 t_c), and once
+inside nothing pushes them out (the wall copies their pressure, the ghost velocities above
+and below cancel in the divergence); (b) rim fragments with Shepard sums 0.1-0.17 whose
+renormalised divergence amplified velocity noise ~1/lambda (rho 1.47 rho0, thrown out at
+40-300 V).  ``renorm_lambda_min`` (on) removes (b) without changing the D/dx = 16
+cross-check; ``no_penetration`` (opt-in) removes (a).  With both and fixed h the D/dx = 32
+impact runs clean to 4 t_c at 10 and 30 m/s; still failing: adaptive h at D/dx = 32
+(tension -10 rho V^2 next to the axis), fixed h at D/dx = 16 (blow-up at 3.2 t_c), and an
+isolated rim ring at mu = 3e-4 whose density decays to 0.03 rho0.  Also
 validated: hydrostatic column,
 Hagen-Poiseuille start-up, prescribed-field kernel tests, a free drop flattened into a sheet;
 the planar mode equals the 2D :class:`~sphfem.fluid.wcsph.FluidSolver` to round-off.
