@@ -26,6 +26,10 @@ import math
 
 import numpy as np
 
+#: kind codes of the mirror particles inside an augmented particle set (fluid rings' and wall
+#: rings' images across the axis; not ParticleSet kinds)
+MIRROR_FLUID, MIRROR_WALL = 4, 5
+
 
 def ring_mass(r, rho, area) -> np.ndarray:
     """M = 2 pi r rho A [kg] of rings at radius ``r`` [m] with density ``rho`` and meridian

@@ -95,6 +95,7 @@ import numpy as np
 from numba import njit, prange
 
 from sphfem import kernels
+from sphfem.axisymmetric import MIRROR_FLUID, MIRROR_WALL  # noqa: F401  (re-exported)
 from sphfem.fluid.axisymmetric_surface_tension import AxisymmetricCSF
 from sphfem.fluid.eos import tait_B, tait_density, tait_pressure
 from sphfem.fluid.no_penetration import NoPenetration
@@ -102,9 +103,6 @@ from sphfem.fluid.wcsph import FluidParams
 from sphfem.neighbors import build_neighbor_list, min_image
 from sphfem.particles import FLUID, WALL
 from sphfem.smallmat import invert_sym3
-
-#: kind codes of the mirror particles inside the augmented set (not ParticleSet kinds)
-MIRROR_FLUID, MIRROR_WALL = 4, 5
 
 
 def _keep_masks():

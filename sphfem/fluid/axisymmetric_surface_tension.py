@@ -73,6 +73,7 @@ import numpy as np
 from numba import njit, prange
 
 from sphfem import kernels
+from sphfem.axisymmetric import MIRROR_FLUID, MIRROR_WALL
 from sphfem.fluid.surface_tension_csf import (
     DELTA_FACTOR,
     NORMAL_HI,
@@ -140,8 +141,6 @@ def colour_kinds(kind) -> np.ndarray:
     """Kinds as the planar CSF passes read them: fluid mirrors count as FLUID, wall mirrors
     as WALL (their rows have no neighbours in the axisymmetric list; they are filled by
     :func:`mirror_normals` / :func:`mirror_scalar`)."""
-    from sphfem.fluid.axisymmetric import MIRROR_FLUID, MIRROR_WALL
-
     k = np.asarray(kind, np.int8).copy()
     k[k == MIRROR_FLUID] = FLUID
     k[k == MIRROR_WALL] = WALL
