@@ -27,8 +27,8 @@ Each figure gets an observed order, a Richardson limit and a GCI error bar
 * conservation: heat lost by the fluid = heat gained by the substrate to 1e-9;
 * the maximum spreading is reached before the end (the run goes past it).
 
-Quick mode (``validate all --quick``, inside the test suite): 50 m/s only, D/dx = 12, 16,
-20 to 0.6 t_c: conservation and the contact temperature are gated, the Richardson figures
+Quick mode (``validate all --quick``, inside the test suite): 50 m/s only, D/dx = 16, 20,
+24 to 0.6 t_c: conservation and the contact temperature are gated, the Richardson figures
 reported (the spreading and stress have not settled by then).
 """
 
@@ -48,7 +48,7 @@ SCENE = "droplet_impact_axisymmetric.toml"
 SPEEDS = (10.0, 30.0, 50.0)
 #: particles across the droplet diameter, coarse to fine
 LEVELS_FULL = (16, 32, 64)
-LEVELS_QUICK = (12, 16, 20)
+LEVELS_QUICK = (16, 20, 24)
 #: end times in t_c (t_c = D / V from t = 0; contact is ~R / V later)
 T_END_FULL, T_END_QUICK = 4.0, 0.6
 #: window of the impact-point temperature, in t_c after contact
