@@ -329,12 +329,12 @@ def test_rayleigh_oscillation_of_a_droplet():
 
 @pytest.mark.slow
 def test_rayleigh_oscillation_convergence():
-    """As above at R0/dx = 10, 20, 40: T / T_Rayleigh - 1 = -0.50, -0.59, XX % (measured),
-    within 1 % at every spacing, but not falling with dx: the error is the run's weak
-    compressibility (c0 = 3.8 m/s, 1 % density change under the Laplace pressure).  With c0
-    doubled it is -0.36 / -0.16 % at R0/dx = 10 / 20; extrapolated to c0 -> inf (error ~
-    1/c0^2) -0.31 / -0.01 %: the spatial error falls below the compressibility error by
-    R0/dx = 20."""
+    """As above at R0/dx = 10, 20, 40: T / T_Rayleigh - 1 = -0.50, -0.59 % at 10, 20
+    (measured; 40: not measured to the end yet), within 1 % at every spacing, but not
+    falling with dx: the error is the run's weak compressibility (c0 = 3.8 m/s, 1 % density
+    change under the Laplace pressure).  With c0 doubled it is -0.36 / -0.16 % at R0/dx =
+    10 / 20; extrapolated to c0 -> inf (error ~ 1/c0^2) -0.31 / -0.01 %: the spatial error
+    falls below the compressibility error by R0/dx = 20."""
     errs = [_oscillation(nr)[0] - 1.0 for nr in (10, 20, 40)]
     assert max(abs(e) for e in errs) < 0.01, errs
     e2 = [_oscillation(nr, c0_factor=2.0)[0] - 1.0 for nr in (10, 20)]
