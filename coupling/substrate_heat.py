@@ -130,8 +130,9 @@ HEAT_SECTION = Section("heat", (
           when=("model", _FEM), default_doc="`[sph] dx` / 2",
           doc="uniform lateral cell size (each particle footprint spans >= 2 cells)"),
     Param("wet_fraction", float, 0.5, gt=0.0, le=1.0, when=("model", _FEM),
-          doc="a surface node is wetted while the wall-layer particle footprints cover this "
-              "fraction of its area"),
+          doc="a surface node becomes wetted when the footprints of the fluid's first cell "
+              "layer (coupling.heat_interface) cover this fraction of its area; it stays "
+              "wetted while the fluid within two cells of the wall covers any of it"),
     Param("robin_tol", float, lambda dim: 1.0 if dim == 3 else 0.1, positive=True,
           when=("model", _FEM), default_doc="1.0 (3D), 0.1 (2D)",
           doc="refactorise the FEM matrix when a node's exchange conductance moved by more "
