@@ -35,7 +35,6 @@ substrate material from MATERIALS) under DIR/case_*, with a progress bar, and wr
 from __future__ import annotations
 
 import argparse
-import copy
 import itertools
 import json
 import sys
@@ -48,10 +47,20 @@ import numpy as np
 HERE = Path(__file__).resolve().parent
 sys.path.insert(0, str(HERE.parents[1]))  # run from a checkout without installing
 
-MATERIALS = {  # substrate materials for the sweep (rho0, c, k, E, nu, alpha)
-    "alumina": dict(rho0=3950.0, c=900.0, k=10.0, E=300e9, nu=0.21, alpha=8.1e-6),
-    "silicon": dict(rho0=2330.0, c=700.0, k=150.0, E=130e9, nu=0.28, alpha=2.6e-6),
-    "glass": dict(rho0=2500.0, c=840.0, k=1.0, E=70e9, nu=0.22, alpha=9.0e-6),
+#: Substrate materials of the sweep at room temperature: density rho0 [kg/m^3], specific
+#: heat c [J/(kg K)], conductivity k [W/(m K)], Young's modulus E [Pa], Poisson's ratio nu,
+#: linear expansion alpha [1/K].  Sources (docs/validation/droplet_sweep/README.md):
+#: alumina: sintered alpha-alumina, Munro, J. Am. Ceram. Soc. 80 (1997) 1919, values at 20 C;
+#: silicon: single crystal, (100) wafer, E and nu along <100> (Hopcroft et al., J. MEMS 19
+#: (2010) 229), k at 300 K (Glassbrenner & Slack, Phys. Rev. 134 (1964) A1058), alpha at
+#: 300 K (Okada & Tokumaru, J. Appl. Phys. 56 (1984) 314), c from the CRC Handbook;
+#: steel: AISI 304 stainless, annealed (ASM Handbook vol. 1, 1990);
+#: glass: soda-lime silicate float glass, EN 572-1:2012 (the values it states for design).
+MATERIALS = {
+    "alumina": dict(rho0=3984.0, c=755.0, k=33.0, E=416e9, nu=0.231, alpha=4.6e-6),
+    "silicon": dict(rho0=2329.0, c=712.0, k=148.0, E=130e9, nu=0.28, alpha=2.6e-6),
+    "steel": dict(rho0=8000.0, c=500.0, k=16.2, E=193e9, nu=0.29, alpha=17.3e-6),
+    "glass": dict(rho0=2500.0, c=720.0, k=1.0, E=70e9, nu=0.2, alpha=9.0e-6),
 }
 
 
@@ -336,54 +345,224 @@ def recorded_scene(out: Path) -> dict:
     return summary["scene"]
 
 
-def sweep(base: dict, out: Path, specs: list[str]) -> list[dict]:
-    from tqdm import tqdm
+SWEEP_AXES = {"speed": "impact speed [m/s]", "temperature": "droplet temperature [C]",
+              "material": f"substrate material ({', '.join(MATERIALS)})"}
 
+
+def parse_sweep(specs: list[str]) -> dict:
+    """``["speed=10,30", "material=glass"]`` -> the sweep's axes (unlisted ones: defaults).
+
+    Raises SystemExit naming the known axes / materials for an unknown axis, an empty or
+    non-numeric value, a repeated axis or an unknown material."""
     axes = {"speed": [50.0], "temperature": [100.0], "material": ["alumina"]}
-    for s in specs:
-        k, _, vals = s.partition("=")
-        if k not in axes or not vals:
-            raise SystemExit(f"study: bad sweep item {s!r}; use speed=..., temperature=..., "
-                             f"material=... ({', '.join(MATERIALS)})")
-        axes[k] = [v if k == "material" else float(v) for v in vals.split(",")]
-    for m in axes["material"]:
-        if m not in MATERIALS:
-            raise SystemExit(f"study: unknown material {m!r}; known: {', '.join(MATERIALS)}")
-    cases = list(itertools.product(axes["speed"], axes["temperature"], axes["material"]))
-    rows = []
-    for speed, temp, mat in tqdm(cases, desc="sweep", unit="case"):
-        data = copy.deepcopy(base)
-        drop = _droplet(data)
-        drop["velocity"] = [0.0, 0.0, -speed]
-        drop["temperature"] = f"{temp} C"
-        sub_mat = data["coupling"]["material"]
-        data["materials"][sub_mat] = {**data["materials"][sub_mat], **MATERIALS[mat]}
-        D = 2 * drop["radius"]
-        # the flight to first contact: clearance beyond R plus at most one spacing of
-        # particle offsets (gap = R by default), then 1.75 tc
-        R = data["sph"]["dx"] * data["sph"].get("support_factor", 3.0)
-        gap = drop.get("gap") or R
-        flight = (gap - R + data["sph"]["dx"]) / speed if drop.get("above") else 0.0
-        data["time"]["t_end"] = flight + 1.75 * D / speed
-        data["output"]["every"] = 0.25 * D / speed
-        case = out / f"case_v{speed:g}_T{temp:g}_{mat}"
-        s = run_case(data, case)
-        st = analyse(case, recorded_scene(case))
-        rows.append({"speed_m_s": speed, "droplet_T_C": temp, "material": mat,
-                     "peak_von_mises_Pa": st["peak_von_mises_Pa"],
-                     "peak_t_over_tc": st["peak_von_mises_t_over_tc"],
-                     "heat_J": st["heat_transferred_J"], "wall_s": s["wall_s"],
-                     "folder": case.name})
+    seen = set()
+    known = "; ".join(f"{k}=... ({v})" for k, v in SWEEP_AXES.items())
+    for item in specs:
+        k, _, vals = item.partition("=")
+        k = k.strip()
+        if k not in axes:
+            raise SystemExit(f"study: unknown sweep parameter {k!r} in {item!r}; known: {known}")
+        if k in seen:
+            raise SystemExit(f"study: sweep parameter {k!r} given twice")
+        seen.add(k)
+        values = [v.strip() for v in vals.split(",") if v.strip()]
+        if not values:
+            raise SystemExit(f"study: sweep parameter {k!r} has no values ({item!r})")
+        if k == "material":
+            bad = [m for m in values if m not in MATERIALS]
+            if bad:
+                raise SystemExit(f"study: unknown material {bad[0]!r}; known: "
+                                 f"{', '.join(MATERIALS)}")
+            axes[k] = values
+            continue
+        try:
+            axes[k] = [float(v) for v in values]
+        except ValueError:
+            raise SystemExit(f"study: {k} values must be numbers, got {item!r}") from None
+        if k == "speed" and min(axes[k]) <= 0:
+            raise SystemExit(f"study: speeds must be > 0 m/s, got {item!r}")
+    return axes
+
+
+def case_name(speed: float, temp: float, mat: str) -> str:
+    return f"case_v{speed:g}_T{temp:g}_{mat}"
+
+
+def sweep_case(scene, speed: float, temp_c: float, mat: str, per_diameter: int | None,
+               t_end_tc: float) -> dict:
+    """The scene dict of one sweep case.
+
+    ``scene``: a :class:`sphfem.scene.Scene`.  Its resolution lengths are scaled together to
+    ``per_diameter`` particles across the droplet (:func:`sphfem.resolution.scaled_resolution`;
+    None keeps them); the droplet moves at ``speed`` towards -z with c0 = 10 ``speed`` (the
+    Mach number and the steps per tc stay fixed); it starts at ``temp_c`` C; the run ends at
+    ``t_end_tc`` tc (tc = D / speed) with outputs every quarter of it; the coupled substrate
+    (the coupling's blocks and FEM) is ``mat`` from MATERIALS under its own name.
+    """
+    from sphfem.resolution import scaled_resolution
+
+    drop0 = next(b for b in scene.blocks if b.kind == "fluid")
+    factor = 1.0
+    if per_diameter is not None:
+        dx0 = drop0.dx or scene.sph.dx
+        factor = 2.0 * drop0.radius / per_diameter / dx0
+    d = scaled_resolution(scene, factor)
+    drop = _droplet(d)
+    drop["velocity"] = [0.0] * (len(drop["velocity"]) - 1) + [-float(speed)]
+    drop["temperature"] = f"{temp_c:g} C"
+    d["materials"][drop["material"]]["c0"] = 10.0 * float(speed)
+    cp = d["coupling"]
+    props = {**d["materials"][cp["material"]], **MATERIALS[mat]}
+    d["materials"] = {k: v for k, v in d["materials"].items() if k != cp["material"]}
+    d["materials"][mat] = props
+    for b in d["blocks"]:
+        if b["name"] in cp["blocks"] or b["material"] == cp["material"]:
+            b["material"] = mat
+    cp["material"] = mat
+    d["time"]["t_end"] = f"{t_end_tc:g} tc"
+    d["output"]["every"] = f"{t_end_tc / 4:g} tc"
+    d["scene"]["name"] = f"{d['scene']['name']}_{case_name(speed, temp_c, mat)}"
+    return d
+
+
+def sweep_row(summary: dict, speed: float, temp_c: float, mat: str) -> dict:
+    """One table row from a case's summary.json (figures of
+    :func:`sphfem.validation.droplet_impact.figures` plus the extremes and ideals)."""
+    from sphfem.validation.droplet_impact import figures
+
+    drop = _droplet(summary["scene"])
+    f = figures(summary, speed, 2.0 * drop["radius"])
+    sh = summary["diagnostics"]["coupling"]["substrate_heat"]
+    T_s0, T_c = sh["substrate_initial_temperature_K"], sh["ideal_contact_temperature_K"]
+    return {
+        "speed_m_s": speed, "droplet_T_C": temp_c, "material": mat,
+        "status": summary["status"], "t_end_over_tc": summary["t"] / f["tc"],
+        "max_spreading": f["spread"], "max_spreading_t_over_tc": f["spread_t_tc"],
+        "heat_J": f["heat"], "heat_ideal_J": f["heat_ideal"],
+        "heat_over_ideal": f["heat"] / f["heat_ideal"] if f["heat_ideal"] else None,
+        "T_contact_ideal_C": T_c - 273.15,
+        "T_impact_mean_C": T_s0 - 273.15 + f["T_impact"],
+        "T_impact_rise_over_ideal": f["T_impact"] / (T_c - T_s0),
+        "T_impact_max_C": sh["T_impact_max_K"] - 273.15,
+        "peak_von_mises_MPa": f["vm_peak"] / 1e6,
+        "peak_von_mises_t_after_contact_over_tc": f["vm_t_tc"],
+        "peak_von_mises_r_um": f["vm_r_m"] * 1e6, "peak_von_mises_z_um": f["vm_z_m"] * 1e6,
+        "heat_balance_rel": f["balance"], "steps": f["steps"],
+        "particles": f["particles"], "wall_s": f["wall_s"],
+    }
+
+
+def _fmt(v) -> str:
+    if isinstance(v, float):
+        return f"{v:.4g}"
+    return "" if v is None else str(v)
+
+
+def write_tables(rows: list[dict], folder: Path) -> None:
+    """``sweep.csv``, ``sweep.json``, ``sweep.md`` (atomic writes) and ``sweep.png`` (the
+    figures against speed, one colour per substrate, one line style per temperature)."""
     from sphfem.output import atomic_write_text, write_json
 
-    write_json(out / "sweep.json", rows)
+    folder.mkdir(parents=True, exist_ok=True)
+    write_json(folder / "sweep.json", rows)
+    if not rows:
+        return
     head = list(rows[0])
-    atomic_write_text(out / "sweep.csv", "\n".join(
-        [",".join(head)] + [",".join(str(r[k]) for k in head) for r in rows]) + "\n")
-    print(f"{'speed':>7} {'T [C]':>7} {'material':>9} {'peak vM [MPa]':>14} {'wall s':>8}")
+    atomic_write_text(folder / "sweep.csv", "\n".join(
+        [",".join(head)] + [",".join(_fmt(r[k]) for k in head) for r in rows]) + "\n")
+    cols = [("speed_m_s", "V m/s"), ("droplet_T_C", "T_drop C"), ("material", "substrate"),
+            ("max_spreading", "D_max/D"), ("max_spreading_t_over_tc", "at t/tc"),
+            ("heat_J", "heat uJ"), ("heat_over_ideal", "heat/ideal"),
+            ("T_impact_mean_C", "T_imp C (mean)"), ("T_contact_ideal_C", "T_contact C"),
+            ("T_impact_rise_over_ideal", "rise/ideal"),
+            ("peak_von_mises_MPa", "vM MPa"), ("peak_von_mises_t_after_contact_over_tc",
+                                                "vM t/tc"),
+            ("peak_von_mises_r_um", "vM r um"), ("peak_von_mises_z_um", "vM z um"),
+            ("wall_s", "wall s"), ("status", "status")]
+    lines = ["| " + " | ".join(c[1] for c in cols) + " |",
+             "|" + "---|" * len(cols)]
     for r in rows:
-        print(f"{r['speed_m_s']:>7g} {r['droplet_T_C']:>7g} {r['material']:>9} "
-              f"{r['peak_von_mises_Pa'] / 1e6:>14.4g} {r['wall_s']:>8.1f}")
+        lines.append("| " + " | ".join(
+            _fmt(r[k] * 1e6 if k == "heat_J" and r[k] is not None else r[k])
+            for k, _ in cols) + " |")
+    atomic_write_text(folder / "sweep.md", "\n".join(lines) + "\n")
+    plot_sweep(rows, folder / "sweep.png")
+
+
+def plot_sweep(rows: list[dict], path: Path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from sphfem.output import atomic_write_bytes
+
+    panels = (("max_spreading", "max spreading D_max / D"),
+              ("heat_over_ideal", "heat into substrate / ideal contact heat"),
+              ("T_impact_rise_over_ideal", "impact-point rise / ideal contact rise"),
+              ("peak_von_mises_MPa", "peak von Mises [MPa]"))
+    mats = list(dict.fromkeys(r["material"] for r in rows))
+    temps = sorted({r["droplet_T_C"] for r in rows})
+    fig, axes = plt.subplots(2, 2, figsize=(10, 7.5), layout="constrained")
+    for ax, (key, label) in zip(axes.ravel(), panels, strict=True):
+        for i, m in enumerate(mats):
+            for j, T in enumerate(temps):
+                rr = sorted((r for r in rows if r["material"] == m and r["droplet_T_C"] == T
+                             and r[key] is not None), key=lambda r: r["speed_m_s"])
+                if rr:
+                    ax.plot([r["speed_m_s"] for r in rr], [r[key] for r in rr],
+                            ["-", "--", ":", "-."][j % 4], marker="os^D"[j % 4],
+                            color=f"C{i}", label=f"{m}, {T:g} C")
+        ax.set_xlabel("impact speed [m/s]")
+        ax.set_ylabel(label)
+        ax.grid(alpha=0.3)
+    axes[0, 0].legend(fontsize=8)
+    import io
+
+    buf = io.BytesIO()
+    fig.savefig(buf, format="png", dpi=110)
+    plt.close(fig)
+    atomic_write_bytes(path, buf.getvalue())
+
+
+def sweep(scene, out: Path, specs: list[str], per_diameter: int | None = 32,
+          t_end_tc: float = 4.0, table_dir: Path | None = None,
+          table_only: bool = False) -> list[dict]:
+    """Run every (speed, droplet temperature, substrate) case of ``specs`` under
+    ``out/case_*`` (a case whose summary.json exists is not run again), print a progress
+    line per case and write the tables (:func:`write_tables`) into ``table_dir`` (default
+    ``out``) after each case.  ``table_only``: tabulate the finished cases, run nothing."""
+    from sphfem.api import run
+    from sphfem.scene import parse_scene
+
+    axes = parse_sweep(specs)
+    cases = list(itertools.product(axes["speed"], axes["temperature"], axes["material"]))
+    table_dir = Path(table_dir) if table_dir is not None else out
+    rows = []
+    for i, (speed, temp, mat) in enumerate(cases, 1):
+        name = case_name(speed, temp, mat)
+        folder = out / name
+        tag = f"sweep [{i}/{len(cases)}] {name}"
+        if not (folder / "summary.json").exists():
+            if table_only:
+                print(f"{tag}: not run", flush=True)
+                continue
+            data = sweep_case(scene, speed, temp, mat, per_diameter, t_end_tc)
+            print(f"{tag}: running", flush=True)
+            t0 = time.perf_counter()
+            run(parse_scene(data, source=name), folder, overwrite=True, raise_on_stop=False)
+            print(f"{tag}: done in {time.perf_counter() - t0:.0f} s", flush=True)
+        else:
+            print(f"{tag}: summary exists, not run again", flush=True)
+        summary = json.loads((folder / "summary.json").read_text())
+        row = sweep_row(summary, speed, temp, mat)
+        print(f"{tag}: {row['status']}, D_max/D {row['max_spreading']:.3g}, heat/ideal "
+              f"{_fmt(row['heat_over_ideal'])}, rise/ideal "
+              f"{row['T_impact_rise_over_ideal']:.3g}, vM {row['peak_von_mises_MPa']:.3g} "
+              f"MPa, {row['wall_s']:.0f} s", flush=True)
+        rows.append(row)
+        write_tables(rows, table_dir)
+    write_tables(rows, table_dir)
     return rows
 
 
@@ -395,7 +574,14 @@ def main(argv=None) -> int:
     p.add_argument("--out", required=True, help="output folder (must not exist, or --plots-only)")
     p.add_argument("--plots-only", action="store_true", help="redraw an existing run")
     p.add_argument("--sweep", nargs="+", metavar="AXIS=V1,V2",
-                   help="speed=..., temperature=... [C], material=...")
+                   help="speed=... [m/s], temperature=... [C], material=... "
+                        f"({', '.join(MATERIALS)}); default scene: the axisymmetric one")
+    p.add_argument("--per-diameter", type=int, default=32,
+                   help="sweep: particles across the droplet (0: the scene's own dx)")
+    p.add_argument("--t-end-tc", type=float, default=4.0, help="sweep: end time in tc")
+    p.add_argument("--table-dir", default=None, help="sweep: folder of the tables (default: --out)")
+    p.add_argument("--table-only", action="store_true",
+                   help="sweep: tabulate the finished cases, run nothing")
     a = p.parse_args(argv)
     out = Path(a.out)
     if a.plots_only:  # the run's own scene, never a default that may differ from it
@@ -410,11 +596,16 @@ def main(argv=None) -> int:
         st = analyse(out, base)
         print(json.dumps(st, indent=1))
         return 0
+    if a.sweep:
+        from sphfem.scene import parse_scene_toml
+
+        scene_file = a.scene or str(HERE / "droplet_impact_axisymmetric.toml")
+        scene = parse_scene_toml(Path(scene_file).read_text(), source=scene_file)
+        sweep(scene, out, a.sweep, per_diameter=a.per_diameter or None,
+              t_end_tc=a.t_end_tc, table_dir=a.table_dir, table_only=a.table_only)
+        return 0
     scene_file = a.scene or str(HERE / "droplet_impact.toml")
     base = tomllib.loads(Path(scene_file).read_text())
-    if a.sweep:
-        sweep(base, out, a.sweep)
-        return 0
     if out.exists() and any(out.iterdir()):
         raise SystemExit(f"study: {out} exists and is not empty (use another --out)")
     run_case(base, out, source=scene_file)
