@@ -1,0 +1,158 @@
+"""Tables and figures of the c0 study (README.md) from the runs' JSON in ``runs/``.
+
+    python docs/validation/c0_study/report.py [--runs DIR]
+
+prints the markdown tables (peaks per run; the quasi-static check) and writes
+``peaks_vs_c0.png`` and ``dynamic_vs_quasi_static.png`` next to this file.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+from pathlib import Path
+
+HERE = Path(__file__).parent
+RHO_F, V, R_DROP, D_DROP = 1000.0, 50.0, 0.05e-3, 0.1e-3
+C_WATER = 1480.0
+#: the axisymmetric scene's substrate (coupling.mesh): alumina, 0.26 mm thick, r <= 1 mm
+E, NU, RHO_S, KAPPA_S = 300e9, 0.21, 3950.0, 10.0 / (3950.0 * 900.0)
+THICKNESS, HALF_WIDTH = 0.26e-3, 1.0e-3
+
+
+def load(runs: Path) -> list[dict]:
+    return [json.loads(p.read_text()) for p in sorted(runs.glob("*.json"))]
+
+
+def c0_of(run: dict) -> float:
+    return run["c0_m_s"]
+
+
+def peaks_table(runs: list[dict]) -> str:
+    rows = ["| D/dx | c0 [m/s] | load | substrate | p_w peak [MPa] (t - t_1, r [um]) | "
+            "rho c0 V [MPa] | p_w / rho c0 V | peak von Mises [MPa] (t - t_1 [ns], r, z [um]) "
+            "| steps | wall s |",
+            "|---|---|---|---|---|---|---|---|---|---|"]
+    for r in sorted(runs, key=lambda r: (r["D_over_dx"], r["mech_only"] is False, c0_of(r),
+                                         bool(r["dynamic"]))):
+        pw = r["peak_wall_pressure"]
+        t1 = first_load_time(r)
+        loc = r["peak_von_mises_location_m"] or [math.nan, math.nan]
+        sub = f"HHT {r['hht_alpha']:g}" if r["dynamic"] else "quasi-static"
+        load = "mechanical" if r["mech_only"] else "mech + thermal"
+        rows.append(
+            f"| {r['D_over_dx']:.0f} | {c0_of(r):.0f} | {load} | {sub} | "
+            f"{pw['p_Pa'] / 1e6:.1f} ({(pw['t_s'] - t1) * 1e9:.0f} ns, "
+            f"{pw['r_m'] * 1e6:.1f}) | {r['rho_c0_V_Pa'] / 1e6:.0f} | "
+            f"{pw['p_Pa'] / r['rho_c0_V_Pa']:.2f} | {r['peak_von_mises_Pa'] / 1e6:.1f} "
+            f"({(r['peak_von_mises_t_s'] - t1) * 1e9:.0f}, {loc[0] * 1e6:.1f}, "
+            f"{loc[1] * 1e6:.1f}) | {r['steps']} | {r['process_wall_s']:.0f} |")
+    return "\n".join(rows)
+
+
+def first_load_time(run: dict) -> float:
+    """The first coupling time with a wall pressure above 1 % of rho c0 V on the axis
+    column: the start of the impact on the wall (t_1)."""
+    for t, p in run["axis_wall_pressure"]:
+        if p > 0.01 * run["rho_c0_V_Pa"]:
+            return t
+    return math.nan
+
+
+def check_table() -> str:
+    from sphfem.fem.elastodynamic import quasi_static_check
+
+    times = {f"water hammer R V / c0^2, c0 = {c:.0f}": R_DROP * V / c ** 2
+             for c in (500.0, 1000.0, C_WATER)}
+    times["contact D / V"] = D_DROP / V
+    q = quasi_static_check(E, NU, RHO_S, THICKNESS, HALF_WIDTH, times)
+    s = q.speeds
+    rows = [f"c_P = {s['P']:.0f}, c_S = {s['S']:.0f}, c_R = {s['R']:.0f} m/s; "
+            f"h / c_P = {q.transit['h/c_P'] * 1e9:.1f} ns, h / c_S = "
+            f"{q.transit['h/c_S'] * 1e9:.1f} ns, T_1 = 4 h / c_S = {q.period * 1e9:.0f} ns, "
+            f"edge echo 2 x {HALF_WIDTH * 1e3:g} mm / c_R = "
+            f"{2 * q.transit['half_width/c_R'] * 1e9:.0f} ns; thermoelastic time "
+            f"kappa / c_P^2 = {KAPPA_S / s['P'] ** 2:.1e} s", "",
+            "| load | time scale [ns] | envelope amplification | quasi-static within 10 %? |",
+            "|---|---|---|---|"]
+    for k, t in q.load_times.items():
+        rows.append(f"| {k} | {t * 1e9:.3g} | {q.amplification[k]:.2f} | "
+                    f"{'yes' if q.applies[k] else 'no'} |")
+    return "\n".join(rows)
+
+
+def plots(runs: list[dict]) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(1, 2, figsize=(10, 4))
+    cs = [400.0, 1600.0]
+    ax[0].plot(cs, [RHO_F * c * V / 1e6 for c in cs], "k--", lw=1, label=r"$\rho c_0 V$")
+    ax[0].plot([C_WATER], [RHO_F * C_WATER * V * (1 + 2 * V / C_WATER) / 1e6], "k*", ms=10,
+               label=r"Lesser & Field $\rho c V(1 + 2V/c)$, c = 1480")
+    marks = {16: "o", 32: "s", 64: "^"}
+    for D in sorted({round(r["D_over_dx"]) for r in runs}):
+        for dyn in (False, True):
+            sel = sorted([r for r in runs if round(r["D_over_dx"]) == D and r["mech_only"]
+                          and bool(r["dynamic"]) == dyn], key=c0_of)
+            if not sel:
+                continue
+            lab = f"D/dx = {D}" + (", dynamic" if dyn else "")
+            if not dyn:
+                ax[0].plot([c0_of(r) for r in sel],
+                           [r["peak_wall_pressure"]["p_Pa"] / 1e6 for r in sel],
+                           marker=marks.get(D, "x"), label=lab)
+            ax[1].plot([c0_of(r) for r in sel], [r["peak_von_mises_Pa"] / 1e6 for r in sel],
+                       marker=marks.get(D, "x"), ls="--" if dyn else "-", label=lab)
+        full = sorted([r for r in runs if round(r["D_over_dx"]) == D and not r["mech_only"]
+                       and not r["dynamic"]], key=c0_of)
+        if full:
+            ax[1].plot([c0_of(r) for r in full], [r["peak_von_mises_Pa"] / 1e6 for r in full],
+                       marker=marks.get(D, "x"), ls=":", label=f"D/dx = {D}, with thermal")
+    ax[0].set(xlabel="c0 [m/s]", ylabel="peak wall pressure [MPa]", title="wall pressure")
+    ax[1].set(xlabel="c0 [m/s]", ylabel="peak von Mises [MPa]",
+              title="substrate: mechanical load alone (solid, dashed) and with thermal")
+    for a in ax:
+        a.grid(alpha=0.3)
+        a.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(HERE / "peaks_vs_c0.png", dpi=120)
+
+    fig, ax = plt.subplots(1, 2, figsize=(10, 4), sharey=False)
+    for i, mech in enumerate((True, False)):
+        for r in sorted(runs, key=lambda r: (r["D_over_dx"], c0_of(r), bool(r["dynamic"]))):
+            if r["mech_only"] != mech or c0_of(r) != C_WATER:
+                continue
+            t1 = first_load_time(r)
+            t = [(p[0] - t1) * 1e9 for p in r["impact_point"]]
+            vm = [p[1] / 1e6 for p in r["impact_point"]]
+            lab = (f"D/dx = {r['D_over_dx']:.0f}, "
+                   + (f"HHT {r['hht_alpha']:g}" if r["dynamic"] else "quasi-static"))
+            ax[i].plot(t, vm, ls="--" if r["dynamic"] else "-", label=lab)
+        ax[i].set(xlabel="t - t_1 [ns]", ylabel="von Mises at the impact point [MPa]",
+                  title=("mechanical load alone" if mech else "mechanical + thermal")
+                  + ", c0 = 1480 m/s")
+        ax[i].grid(alpha=0.3)
+        ax[i].legend(fontsize=7)
+        ax[i].set_xlim(-20, None)
+    fig.tight_layout()
+    fig.savefig(HERE / "dynamic_vs_quasi_static.png", dpi=120)
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--runs", type=Path, default=HERE / "runs")
+    a = ap.parse_args(argv)
+    runs = load(a.runs)
+    print(peaks_table(runs))
+    print()
+    print(check_table())
+    plots(runs)
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
