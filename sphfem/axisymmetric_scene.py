@@ -63,6 +63,7 @@ from numba import njit, prange
 from scipy.spatial import cKDTree
 
 from sphfem import kernels
+from sphfem.fluid.axisymmetric import MIRROR_FLUID
 from sphfem.neighbors import build_neighbor_list
 from sphfem.particles import FLUID, GHOST, WALL, ParticleSet
 from sphfem.physics import PhysicsModule
@@ -106,7 +107,7 @@ def ring_areas(ps) -> np.ndarray:
 def wall_ring_forces(x, v, vg, rho, p, mt, mu, kind, offsets, indices, Rp, s2, kcode, eps,
                      alpha_c, out):
     """Eq. (1) of the module docstring for the real WALL rows of the fluid's augmented set
-    (``kind`` WALL = real wall, fluid-like = FLUID or its mirrors, code 4): ``out[w]`` the
+    (``kind`` WALL = real wall, fluid-like = FLUID or its mirrors MIRROR_FLUID): ``out[w]`` the
     ring force [N] of wall w; the pair terms are those of
     :func:`sphfem.fluid.axisymmetric.forces` seen from the fluid particle."""
     for w in prange(x.shape[0]):
@@ -118,7 +119,7 @@ def wall_ring_forces(x, v, vg, rho, p, mt, mu, kind, offsets, indices, Rp, s2, k
         f1 = 0.0
         for jj in range(offsets[w], offsets[w + 1]):
             i = indices[jj]
-            if kind[i] != FLUID and kind[i] != 4:
+            if kind[i] != FLUID and kind[i] != MIRROR_FLUID:
                 continue
             r0 = x[w, 0] - x[i, 0]  # x_j - x_i with j = the wall
             r1 = x[w, 1] - x[i, 1]
