@@ -3,8 +3,8 @@
 
 Water-like droplet D = 0.1 mm, rho = 1000 kg/m^3, no gravity, onto a rigid wall of 3 layers of
 Adami particles (the set-up of impact_robustness.build: lattice rings, surface R = 3 dx above
-the wall top z = 0, adaptive h, the no-penetration correction), with the axisymmetric CSF
-surface tension sigma and c0 = 10 V.  A case is (V, mu, sigma) -> We = rho V^2 D / sigma,
+the wall top z = 0, the no-penetration correction; fixed h unless ``--adaptive-h``), with
+the axisymmetric CSF surface tension sigma and c0 = 10 V.  A case is (V, mu, sigma) -> We = rho V^2 D / sigma,
 Re = rho V D / mu.  Every 0.05 t_c (t_c = D / V, counted from the start, 3 dx / V before
 contact) the spread diameter is measured as twice the colour contact radius
 (:func:`sphfem.fluid.spreading.colour_contact_radius`); the run stops at ``--tc`` or 0.75 t_c
@@ -49,12 +49,14 @@ def groups(v, mu, sigma):
     return dc.RHO * v * v * dc.D / sigma, dc.RHO * v * dc.D / mu
 
 
-def run(case, n, tc=4.0, verbose=True):
-    """One impact at D/dx = n; returns the record with the spread history."""
+def run(case, n, tc=4.0, verbose=True, adaptive_h=False):
+    """One impact at D/dx = n; returns the record with the spread history.  Fixed h by
+    default: with adaptive h the D/dx = 32 runs throw rings along the wall from 1.4 t_c
+    (sphfem.fluid.axisymmetric's docstring; seen here at We 139, Re 1000)."""
     from sphfem.fluid.spreading import colour_contact_radius
 
     v, mu, sigma = CASES[case]
-    f, dx = ir.build(n, v, 10.0 * v, mu, surface_tension=sigma)
+    f, dx = ir.build(n, v, 10.0 * v, mu, adaptive_h=adaptive_h, surface_tension=sigma)
     hist = []
     t0 = time.perf_counter()
 
@@ -85,7 +87,7 @@ def run(case, n, tc=4.0, verbose=True):
     h = np.array(hist)
     k = int(h[:, 1].argmax())
     We, Re = groups(v, mu, sigma)
-    return dict(case=case, n=n, dx=dx, V=v, mu=mu, sigma=sigma, We=We, Re=Re,
+    return dict(case=case, n=n, dx=dx, adaptive_h=adaptive_h, V=v, mu=mu, sigma=sigma, We=We, Re=Re,
                 fluid=int(f.fluid.sum()), steps=f.step_count,
                 seconds=time.perf_counter() - t0, t_reached=f.t * v / dc.D, error=error,
                 beta_max=float(h[k, 1]), t_max=float(h[k, 0]), at_end=k == len(h) - 1,
@@ -94,15 +96,81 @@ def run(case, n, tc=4.0, verbose=True):
                 columns=("t/tc", "beta_colour", "beta_row", "2 max r/D"), history=hist)
 
 
+def table(files, out_dir, theta_deg=90.0):
+    """Markdown table and PNG of the runs in ``files`` (JSON of :func:`run`) against the
+    correlations of :mod:`sphfem.fluid.spreading` at contact angle ``theta_deg``."""
+    from sphfem.fluid.spreading import CORRELATIONS
+    from sphfem.validation.richardson import richardson
+
+    by = {}
+    for fn in files:
+        d = json.load(open(fn))
+        by.setdefault(d["case"], []).append(d)
+    names = list(CORRELATIONS)
+    head = ("| case | We | Re | D/dx | beta_max (colour) | t_max / t_c | s per run | "
+            "limit +- bar (order) | " + " | ".join(names) + " |")
+    lines = [head, "|" + "---|" * (head.count("|") - 1)]
+    pts = []
+    for case, runs in sorted(by.items(), key=lambda kv: groups(*CASES[kv[0]])):
+        runs.sort(key=lambda d: d["n"])
+        We, Re = groups(*CASES[case])
+        ns = [d["n"] for d in runs]
+        b = [d["beta_max"] for d in runs]
+        est = "-"
+        if len(runs) >= 3:
+            e = richardson([dc.D / n for n in ns], b)
+            order = f"{e.order:.2f}" if e.order is not None else "none"
+            est = f"{e.value:.3f} +- {e.error_bar:.3f} ({order})"
+        cor = [float(CORRELATIONS[c](We, Re, theta_deg)) for c in names]
+        vals = " / ".join(f"{x:.3f}{'*' if d['at_end'] else ''}"
+                          for x, d in zip(b, runs, strict=True))
+        tmax = " / ".join(f"{d['t_max']:.2f}" for d in runs)
+        secs = " / ".join(f"{d['seconds']:.0f}" for d in runs)
+        lines.append(f"| {case} | {We:.0f} | {Re:.0f} | {' / '.join(map(str, ns))} | {vals} | "
+                     f"{tmax} | {secs} | {est} | " + " | ".join(f"{c:.2f}" for c in cor) + " |")
+        pts.append((We, Re, ns, b, cor))
+    Path(out_dir).mkdir(parents=True, exist_ok=True)
+    (Path(out_dir) / "axisymmetric_table.md").write_text("\n".join(lines) + "\n")
+    print("\n".join(lines))
+
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(7.5, 4.5))
+    idx = np.arange(len(pts))
+    marks = "os^vD"
+    for k, c in enumerate(names):
+        ax.plot(idx, [p[4][k] for p in pts], marks[k % 5], mfc="none", ms=8, label=c)
+    for i, (_, _, ns, b, _) in enumerate(pts):
+        for n, x in zip(ns, b, strict=True):
+            ax.plot(i + 0.15, x, "k.", ms=4 + n / 8)
+            ax.annotate(f"{n}", (i + 0.2, x), fontsize=7)
+    ax.plot([], [], "k.", label="SPH axisymmetric (label: D/dx)")
+    ax.set_xticks(idx, [f"We {p[0]:.0f}\nRe {p[1]:.0f}" for p in pts])
+    ax.set_ylabel("D_max / D")
+    ax.set_title(f"maximum spreading; correlations at theta = {theta_deg:.0f} deg")
+    ax.legend(fontsize=7)
+    fig.tight_layout()
+    fig.savefig(Path(out_dir) / "axisymmetric_spreading.png", dpi=120)
+
+
 def main():
     ap = argparse.ArgumentParser()
-    ap.add_argument("mode", choices=["run"])
+    ap.add_argument("mode", choices=["run", "table"])
+    ap.add_argument("files", nargs="*")
+    ap.add_argument("--dir", default="docs/validation/spreading")
     ap.add_argument("--case", choices=sorted(CASES))
     ap.add_argument("--n", type=int, default=16, help="D / dx")
     ap.add_argument("--tc", type=float, default=4.0)
+    ap.add_argument("--adaptive-h", action="store_true")
     ap.add_argument("--out")
     a = ap.parse_args()
-    res = run(a.case, a.n, a.tc)
+    if a.mode == "table":
+        table(a.files, a.dir)
+        return
+    res = run(a.case, a.n, a.tc, adaptive_h=a.adaptive_h)
     print(json.dumps({k: x for k, x in res.items() if k not in ("history", "columns")}))
     if a.out:
         with open(a.out, "w") as fh:
