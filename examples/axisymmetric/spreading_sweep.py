@@ -1,14 +1,15 @@
 """Maximum spreading of an axisymmetric droplet impact against the published correlations
 (issue 16).
 
-Water-like droplet D = 0.1 mm, rho = 1000 kg/m^3, no gravity, onto a rigid wall of 3 layers of
-Adami particles (the set-up of impact_robustness.build: lattice rings, surface R = 3 dx above
-the wall top z = 0, the no-penetration correction; fixed h unless ``--adaptive-h``), with
-the axisymmetric CSF surface tension sigma and c0 = 10 V.  A case is (V, mu, sigma) -> We = rho V^2 D / sigma,
-Re = rho V D / mu.  Every 0.05 t_c (t_c = D / V, counted from the start, 3 dx / V before
-contact) the spread diameter is measured as twice the colour contact radius
-(:func:`sphfem.fluid.spreading.colour_contact_radius`); the run stops at ``--tc`` or 0.75 t_c
-after the maximum once the diameter has fallen 3 % below it.
+Water-like droplet D = 0.1 mm, rho = 1000 kg/m^3, no gravity, onto a rigid wall of 3
+layers of Adami particles (the set-up of impact_robustness.build: lattice rings, surface
+R = 3 dx above the wall top z = 0, the no-penetration correction; fixed h unless
+``--adaptive-h``), with the axisymmetric CSF surface tension sigma and c0 = 10 V.  A case
+is (V, mu, sigma) -> We = rho V^2 D / sigma, Re = rho V D / mu.  Every 0.05 t_c (t_c = D / V,
+counted from the start, 3 dx / V before contact) the spread diameter is measured as twice
+the colour contact radius (:func:`sphfem.fluid.spreading.colour_contact_radius`, measuring
+kernel R = 3 dx); the run stops at ``--tc`` or 0.75 t_c after the maximum once the diameter
+has fallen 3 % below it.
 
     python examples/axisymmetric/spreading_sweep.py run --case we139_re1000 --n 16 --out x.json
     python examples/axisymmetric/spreading_sweep.py table docs/validation/spreading/axi/*.json
