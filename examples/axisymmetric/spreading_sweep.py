@@ -100,7 +100,7 @@ def run(case, n, tc=4.0, verbose=True, adaptive_h=False):
 def table(files, out_dir, theta_deg=90.0):
     """Markdown table and PNG of the runs in ``files`` (JSON of :func:`run`) against the
     correlations of :mod:`sphfem.fluid.spreading` at contact angle ``theta_deg``."""
-    from sphfem.fluid.spreading import CORRELATIONS
+    from sphfem.fluid.spreading import CORRELATIONS, artificial_nu, effective_reynolds
     from sphfem.validation.richardson import richardson
 
     by = {}
@@ -109,7 +109,7 @@ def table(files, out_dir, theta_deg=90.0):
         by.setdefault(d["case"], []).append(d)
     names = list(CORRELATIONS)
     head = ("| case | We | Re | D/dx | beta_max (colour) | t_max / t_c | s per run | "
-            "limit +- bar (order) | " + " | ".join(names) + " |")
+            "limit +- bar (order) | Re_eff | PF96 at Re_eff | " + " | ".join(names) + " |")
     lines = [head, "|" + "---|" * (head.count("|") - 1)]
     pts = []
     for case, runs in sorted(by.items(), key=lambda kv: groups(*CASES[kv[0]])):
@@ -127,6 +127,15 @@ def table(files, out_dir, theta_deg=90.0):
                           for x, d in zip(b, runs, strict=True))
         tmax = " / ".join(f"{d['t_max']:.2f}" for d in runs)
         secs = " / ".join(f"{d['seconds']:.0f}" for d in runs)
+        # artificial viscosity alpha h c0 (alpha = 0.02, h = 1.5 dx, c0 = 10 V; the
+        # meridian kernel's d = 2) on top of mu: the Reynolds number each level behaves like
+        v, mu = CASES[case][:2]
+        re_eff = [effective_reynolds(v, dc.D, mu / dc.RHO,
+                                     artificial_nu(0.02, 1.5 * dc.D / n, 10.0 * v, 2))
+                  for n in ns]
+        pf_eff = [float(CORRELATIONS["pasandideh-fard-1996"](We, r, theta_deg)) for r in re_eff]
+        est += (" | " + " / ".join(f"{r:.0f}" for r in re_eff) + " | "
+                + " / ".join(f"{x:.2f}" for x in pf_eff))
         lines.append(f"| {case} | {We:.0f} | {Re:.0f} | {' / '.join(map(str, ns))} | {vals} | "
                      f"{tmax} | {secs} | {est} | " + " | ".join(f"{c:.2f}" for c in cor) + " |")
         pts.append((We, Re, ns, b, cor))
