@@ -117,7 +117,7 @@ def table(files, out_dir, theta_deg=90.0):
         We, Re = groups(*CASES[case])
         ns = [d["n"] for d in runs]
         b = [d["beta_max"] for d in runs]
-        est = "-"
+        est, e = "-", None
         if len(runs) >= 3:
             e = richardson([dc.D / n for n in ns], b)
             order = f"{e.order:.2f}" if e.order is not None else "none"
@@ -138,7 +138,7 @@ def table(files, out_dir, theta_deg=90.0):
                 + " / ".join(f"{x:.2f}" for x in pf_eff))
         lines.append(f"| {case} | {We:.0f} | {Re:.0f} | {' / '.join(map(str, ns))} | {vals} | "
                      f"{tmax} | {secs} | {est} | " + " | ".join(f"{c:.2f}" for c in cor) + " |")
-        pts.append((We, Re, ns, b, cor))
+        pts.append((We, Re, ns, b, cor, e))
     Path(out_dir).mkdir(parents=True, exist_ok=True)
     (Path(out_dir) / "axisymmetric_table.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
@@ -153,11 +153,15 @@ def table(files, out_dir, theta_deg=90.0):
     marks = "os^vD"
     for k, c in enumerate(names):
         ax.plot(idx, [p[4][k] for p in pts], marks[k % 5], mfc="none", ms=8, label=c)
-    for i, (_, _, ns, b, _) in enumerate(pts):
+    for i, (_, _, ns, b, _, e) in enumerate(pts):
         for n, x in zip(ns, b, strict=True):
-            ax.plot(i + 0.15, x, "k.", ms=4 + n / 8)
-            ax.annotate(f"{n}", (i + 0.2, x), fontsize=7)
+            ax.plot(i + 0.12, x, "k.", ms=3 + n / 10)
+            ax.annotate(f"{n}", (i + 0.15, x), fontsize=7)
+        if e is not None:
+            ax.errorbar(i + 0.3, e.value, yerr=e.error_bar, fmt="r_", capsize=3)
     ax.plot([], [], "k.", label="SPH axisymmetric (label: D/dx)")
+    ax.errorbar([], [], yerr=[], fmt="r_", capsize=3, label="Richardson limit +- GCI bar")
+    ax.set_xlim(-0.5, len(pts) - 0.4)
     ax.set_xticks(idx, [f"We {p[0]:.0f}\nRe {p[1]:.0f}" for p in pts])
     ax.set_ylabel("D_max / D")
     ax.set_title(f"maximum spreading; correlations at theta = {theta_deg:.0f} deg")
