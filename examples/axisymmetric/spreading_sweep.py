@@ -109,7 +109,8 @@ def table(files, out_dir, theta_deg=90.0):
         by.setdefault(d["case"], []).append(d)
     names = list(CORRELATIONS)
     head = ("| case | We | Re | D/dx | beta_max (colour) | t_max / t_c | s per run | "
-            "limit +- bar (order) | Re_eff | PF96 at Re_eff | " + " | ".join(names) + " |")
+            "Richardson limit; finest +- GCI bar (order) | Re_eff | PF96 at Re_eff | "
+            + " | ".join(names) + " |")
     lines = [head, "|" + "---|" * (head.count("|") - 1)]
     pts = []
     for case, runs in sorted(by.items(), key=lambda kv: groups(*CASES[kv[0]])):
@@ -121,7 +122,7 @@ def table(files, out_dir, theta_deg=90.0):
         if len(runs) >= 3:
             e = richardson([dc.D / n for n in ns], b)
             order = f"{e.order:.2f}" if e.order is not None else "none"
-            est = f"{e.value:.3f} +- {e.error_bar:.3f} ({order})"
+            est = f"{e.value:.3f}; {b[-1]:.3f} +- {e.error_bar:.3f} ({order})"
         cor = [float(CORRELATIONS[c](We, Re, theta_deg)) for c in names]
         vals = " / ".join(f"{x:.3f}{'*' if d['at_end'] else ''}"
                           for x, d in zip(b, runs, strict=True))
@@ -158,9 +159,10 @@ def table(files, out_dir, theta_deg=90.0):
             ax.plot(i + 0.12, x, "k.", ms=3 + n / 10)
             ax.annotate(f"{n}", (i + 0.15, x), fontsize=7)
         if e is not None:
-            ax.errorbar(i + 0.3, e.value, yerr=e.error_bar, fmt="r_", capsize=3)
+            ax.errorbar(i + 0.3, b[-1], yerr=e.error_bar, fmt="none", ecolor="r", capsize=3)
+            ax.plot(i + 0.3, e.value, "rx")
     ax.plot([], [], "k.", label="SPH axisymmetric (label: D/dx)")
-    ax.errorbar([], [], yerr=[], fmt="r_", capsize=3, label="Richardson limit +- GCI bar")
+    ax.plot([], [], "rx", label="Richardson limit (bar: GCI band about the finest level)")
     ax.set_xlim(-0.5, len(pts) - 0.4)
     ax.set_xticks(idx, [f"We {p[0]:.0f}\nRe {p[1]:.0f}" for p in pts])
     ax.set_ylabel("D_max / D")
