@@ -12,6 +12,8 @@ mass is unchanged.
 
     python examples/axisymmetric/impact_robustness.py --n 32 --v 10 --out n32_v10.json
     python examples/axisymmetric/impact_robustness.py --n 32 --v 10 --c0 1480 --tc 1
+
+Measured cases and what they show: examples/axisymmetric/robustness_results.md.
 """
 
 from __future__ import annotations
@@ -108,10 +110,12 @@ def main():
     ap.add_argument("--tc", type=float, default=4.0)
     ap.add_argument("--fixed-h", action="store_true")
     ap.add_argument("--no-penetration-off", action="store_true")
+    ap.add_argument("--fragment-incompressible", action="store_true")
     ap.add_argument("--out")
     a = ap.parse_args()
     res = run(a.n, a.v, a.c0 or 10 * a.v, a.mu, a.tc, adaptive_h=not a.fixed_h,
-              no_penetration=not a.no_penetration_off)
+              no_penetration=not a.no_penetration_off,
+              fragment_incompressible=a.fragment_incompressible)
     print(json.dumps({k: x for k, x in res.items() if k not in ("history", "columns")}))
     if a.out:
         with open(a.out, "w") as fh:
