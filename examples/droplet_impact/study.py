@@ -438,6 +438,8 @@ def sweep_row(summary: dict, speed: float, temp_c: float, mat: str) -> dict:
         "speed_m_s": speed, "droplet_T_C": temp_c, "material": mat,
         "status": summary["status"], "t_end_over_tc": summary["t"] / f["tc"],
         "max_spreading": f["spread"], "max_spreading_t_over_tc": f["spread_t_tc"],
+        # the largest spread in the last 5 % of the run: still spreading, a lower bound
+        "spreading_at_end": f["spread_t_tc"] >= 0.95 * summary["t"] / f["tc"],
         "heat_J": f["heat"], "heat_ideal_J": f["heat_ideal"],
         "heat_over_ideal": f["heat"] / f["heat_ideal"] if f["heat_ideal"] else None,
         "T_contact_ideal_C": T_c - 273.15,
@@ -448,7 +450,8 @@ def sweep_row(summary: dict, speed: float, temp_c: float, mat: str) -> dict:
         "peak_von_mises_t_after_contact_over_tc": f["vm_t_tc"],
         "peak_von_mises_r_um": f["vm_r_m"] * 1e6, "peak_von_mises_z_um": f["vm_z_m"] * 1e6,
         "heat_balance_rel": f["balance"], "steps": f["steps"],
-        "particles": f["particles"], "wall_s": f["wall_s"],
+        "particles": f["particles"], "setup_s": summary.get("setup_s"),
+        "wall_s": f["wall_s"],
     }
 
 
@@ -472,13 +475,14 @@ def write_tables(rows: list[dict], folder: Path) -> None:
         [",".join(head)] + [",".join(_fmt(r[k]) for k in head) for r in rows]) + "\n")
     cols = [("speed_m_s", "V m/s"), ("droplet_T_C", "T_drop C"), ("material", "substrate"),
             ("max_spreading", "D_max/D"), ("max_spreading_t_over_tc", "at t/tc"),
+            ("spreading_at_end", "still spreading"),
             ("heat_J", "heat uJ"), ("heat_over_ideal", "heat/ideal"),
             ("T_impact_mean_C", "T_imp C (mean)"), ("T_contact_ideal_C", "T_contact C"),
             ("T_impact_rise_over_ideal", "rise/ideal"),
             ("peak_von_mises_MPa", "vM MPa"), ("peak_von_mises_t_after_contact_over_tc",
                                                 "vM t/tc"),
             ("peak_von_mises_r_um", "vM r um"), ("peak_von_mises_z_um", "vM z um"),
-            ("wall_s", "wall s"), ("status", "status")]
+            ("setup_s", "set-up s"), ("wall_s", "stepping s"), ("status", "status")]
     lines = ["| " + " | ".join(c[1] for c in cols) + " |",
              "|" + "---|" * len(cols)]
     for r in rows:
