@@ -119,12 +119,15 @@ def table(files, out_dir, theta_deg=90.0):
         ns = [d["n"] for d in runs]
         b = [d["beta_max"] for d in runs]
         est, e = "-", None
-        if len(runs) >= 3:
-            e = richardson([dc.D / n for n in ns], b)
+        # a maximum at the last frame (run ended or broke off while spreading) is only a
+        # lower bound: such levels stay out of the extrapolation
+        ok = [(n, x) for n, x, d in zip(ns, b, runs, strict=True) if not d["at_end"]]
+        if len(ok) >= 3:
+            e = richardson([dc.D / n for n, _ in ok], [x for _, x in ok])
             order = f"{e.order:.2f}" if e.order is not None else "none"
-            est = f"{e.value:.3f}; {b[-1]:.3f} +- {e.error_bar:.3f} ({order})"
+            est = f"{e.value:.3f}; {ok[-1][1]:.3f} +- {e.error_bar:.3f} ({order})"
         cor = [float(CORRELATIONS[c](We, Re, theta_deg)) for c in names]
-        vals = " / ".join(f"{x:.3f}{'*' if d['at_end'] else ''}"
+        vals = " / ".join(f"{'>= ' if d['at_end'] else ''}{x:.3f}"
                           for x, d in zip(b, runs, strict=True))
         tmax = " / ".join(f"{d['t_max']:.2f}" for d in runs)
         secs = " / ".join(f"{d['seconds']:.0f}" for d in runs)
@@ -139,7 +142,7 @@ def table(files, out_dir, theta_deg=90.0):
                 + " / ".join(f"{x:.2f}" for x in pf_eff))
         lines.append(f"| {case} | {We:.0f} | {Re:.0f} | {' / '.join(map(str, ns))} | {vals} | "
                      f"{tmax} | {secs} | {est} | " + " | ".join(f"{c:.2f}" for c in cor) + " |")
-        pts.append((We, Re, ns, b, cor, e))
+        pts.append((We, Re, ns, b, cor, e, runs))
     Path(out_dir).mkdir(parents=True, exist_ok=True)
     (Path(out_dir) / "axisymmetric_table.md").write_text("\n".join(lines) + "\n")
     print("\n".join(lines))
@@ -154,14 +157,15 @@ def table(files, out_dir, theta_deg=90.0):
     marks = "os^vD"
     for k, c in enumerate(names):
         ax.plot(idx, [p[4][k] for p in pts], marks[k % 5], mfc="none", ms=8, label=c)
-    for i, (_, _, ns, b, _, e) in enumerate(pts):
-        for n, x in zip(ns, b, strict=True):
-            ax.plot(i + 0.12, x, "k.", ms=3 + n / 10)
+    for i, (_, _, ns, b, _, e, runs) in enumerate(pts):
+        for n, x, d in zip(ns, b, runs, strict=True):
+            ax.plot(i + 0.12, x, "k^" if d["at_end"] else "k.", ms=3 + n / 10)
             ax.annotate(f"{n}", (i + 0.15, x), fontsize=7)
         if e is not None:
-            ax.errorbar(i + 0.3, b[-1], yerr=e.error_bar, fmt="none", ecolor="r", capsize=3)
+            ax.errorbar(i + 0.3, e.finest, yerr=e.error_bar, fmt="none", ecolor="r", capsize=3)
             ax.plot(i + 0.3, e.value, "rx")
     ax.plot([], [], "k.", label="SPH axisymmetric (label: D/dx)")
+    ax.plot([], [], "k^", label="SPH, lower bound (still spreading at the run's end)")
     ax.plot([], [], "rx", label="Richardson limit (bar: GCI band about the finest level)")
     ax.set_xlim(-0.5, len(pts) - 0.4)
     ax.set_xticks(idx, [f"We {p[0]:.0f}\nRe {p[1]:.0f}" for p in pts])
