@@ -160,6 +160,14 @@ def _patch(dx: float, dynamic: bool, hht_alpha: float) -> WallPressure:
     return wall
 
 
+def probe_maxima(folder: Path) -> list:
+    """[(r, z, largest von Mises over the run [Pa])] at each probe of ``folder``'s run."""
+    h = json.loads((folder / "substrate" / "history.json").read_text())
+    rows = [r for r in h["history"] if "probes" in r]
+    return [(*pt, max(r["probes"][k]["von_mises"] for r in rows))
+            for k, pt in enumerate(h["probes"])]
+
+
 def figures(folder: Path, wall: WallPressure, c0_used: float) -> dict:
     """Peak wall pressure, peak von Mises (value, t, place), the impact-point probe
     history and the run's cost, from ``folder``'s summary and substrate history."""
@@ -181,6 +189,7 @@ def figures(folder: Path, wall: WallPressure, c0_used: float) -> dict:
         "peak_von_mises_location_m": c.get("peak_von_mises_location_m"),
         "peak_history": [(h["t"], h["peak_von_mises"], h["peak_location"]) for h in hist],
         "impact_point": probe0,
+        "probe_max": probe_maxima(folder),
         "every_k_steps": c.get("every_k_steps"),
         "backend": c.get("backend", {}).get("dynamics") if isinstance(c.get("backend"), dict)
         else None,

@@ -1,6 +1,6 @@
 """Tables and figures of the c0 study (README.md) from the runs' JSON in ``runs/``.
 
-    python docs/validation/c0_study/report.py [--runs DIR]
+    python docs/validation/c0_study/report.py [--runs DIR] [--backfill]
 
 prints the markdown tables (peaks per run; the quasi-static check) and writes
 ``peaks_vs_c0.png`` and ``dynamic_vs_quasi_static.png`` next to this file.
@@ -65,6 +65,8 @@ def check_table() -> str:
 
     times = {f"water hammer R V / c0^2, c0 = {c:.0f}": R_DROP * V / c ** 2
              for c in (500.0, 1000.0, C_WATER)}
+    for n in (16, 32, 64):  # the SPH load's rise: the lattice droplet meets the wall
+        times[f"SPH contact rise dx / V, D/dx = {n}"] = D_DROP / n / V
     times["contact D / V"] = D_DROP / V
     q = quasi_static_check(E, NU, RHO_S, THICKNESS, HALF_WIDTH, times)
     s = q.speeds
@@ -80,6 +82,49 @@ def check_table() -> str:
         rows.append(f"| {k} | {t * 1e9:.3g} | {q.amplification[k]:.2f} | "
                     f"{'yes' if q.applies[k] else 'no'} |")
     return "\n".join(rows)
+
+
+def depth_table(runs: list[dict]) -> str:
+    """Largest von Mises over the run at the probes under the impact point: HHT against
+    quasi-static, for each pair of runs differing only in the substrate."""
+    pairs = []
+    for d in runs:
+        if not d["dynamic"] or "probe_max" not in d:
+            continue
+        q = [r for r in runs if not r["dynamic"] and r["D_over_dx"] == d["D_over_dx"]
+             and r["c0"] == d["c0"] and r["mech_only"] == d["mech_only"] and "probe_max" in r]
+        if q:
+            pairs.append((q[0], d))
+    if not pairs:
+        return ""
+    head = "| depth [um] | " + " | ".join(
+        f"D/dx {q['D_over_dx']:.0f}, c0 {c0_of(q):.0f}, "
+        f"{'mech' if q['mech_only'] else 'mech + th'}: qs / HHT [MPa] (ratio)"
+        for q, _ in pairs) + " |"
+    rows = [head, "|---" * (len(pairs) + 1) + "|"]
+    for k, pt in enumerate(pairs[0][0]["probe_max"]):
+        cells = []
+        for q, d in pairs:
+            a, b = q["probe_max"][k][2], d["probe_max"][k][2]
+            cells.append(f"{a / 1e6:.3g} / {b / 1e6:.3g} ({b / a:.2f})")
+        rows.append(f"| {-pt[1] * 1e6:.0f} | " + " | ".join(cells) + " |")
+    return "\n".join(rows)
+
+
+def backfill(runs: Path) -> None:
+    """Add ``probe_max`` to run JSONs written before c0_study recorded it, from the run
+    folders next to them."""
+    from importlib.util import module_from_spec, spec_from_file_location
+
+    spec = spec_from_file_location(
+        "c0_study", HERE.parents[2] / "examples" / "droplet_impact" / "c0_study.py")
+    mod = module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    for p in sorted(runs.glob("*.json")):
+        d = json.loads(p.read_text())
+        if "probe_max" not in d and (runs / p.stem).is_dir():
+            d["probe_max"] = mod.probe_maxima(runs / p.stem)
+            p.write_text(json.dumps(d, indent=1))
 
 
 def plots(runs: list[dict]) -> None:
@@ -145,11 +190,17 @@ def plots(runs: list[dict]) -> None:
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser()
     ap.add_argument("--runs", type=Path, default=HERE / "runs")
+    ap.add_argument("--backfill", action="store_true",
+                    help="add probe maxima from the run folders to older run JSONs")
     a = ap.parse_args(argv)
+    if a.backfill:
+        backfill(a.runs)
     runs = load(a.runs)
     print(peaks_table(runs))
     print()
     print(check_table())
+    print()
+    print(depth_table(runs))
     plots(runs)
     return 0
 
