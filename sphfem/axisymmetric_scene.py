@@ -188,7 +188,9 @@ class AxisymmetricFluidModule(PhysicsModule):
 
     Parameters from ``[fluid]`` (:func:`sphfem.fluid.wcsph.params_from_scene`): rho0, c0,
     gamma, mu, delta, alpha, gravity (g_r, g_z: g_r must be 0), cfl, eps_visc, cond_max.
-    Surface tension is not yet available in (r, z): a scene that names one is refused.
+    Surface tension: ``surface_tension = "csf"`` is the CSF force with the hoop curvature
+    (:mod:`sphfem.fluid.axisymmetric_surface_tension`, sigma from the material); the other
+    models are refused.
     Writes ``x``, ``v``, ``rho``, ``p``, ``vol`` (= m / rho, ring volume) of the fluid and
     ``f_fluid`` (ring forces, eq. 1) of the walls after every step.
     """
@@ -210,9 +212,13 @@ class AxisymmetricFluidModule(PhysicsModule):
 
         super().__init__(scene)
         self.params = params_from_scene(scene)
-        if self.params.surface_tension != "none":
+        if self.params.surface_tension not in ("none", "csf"):
             raise ValueError(f'fluid: surface_tension = "{self.params.surface_tension}" is '
-                             'not available with geometry = "axisymmetric"; set "none"')
+                             'not available with geometry = "axisymmetric"; set "csf" (with the '
+                             'hoop curvature) or "none"')
+        #: sigma of the axisymmetric CSF (0: off)
+        self.sigma_st = (float(self.params.sigma) if self.params.surface_tension == "csf"
+                         else 0.0)
         if abs(float(np.asarray(self.params.gravity, float).reshape(-1)[0])) > 0.0:
             raise ValueError("fluid: an axisymmetric scene takes gravity along z only "
                              "(gravity[0] = 0)")
@@ -241,7 +247,8 @@ class AxisymmetricFluidModule(PhysicsModule):
         self.solver = AxisymmetricFluid(
             x, ps.v[idx], ps.rho[idx], kind, np.where(kind == FLUID, ps.m[idx], 0.0), A,
             ctx.R, self.params, kernel=self.scene.sph.kernel, adaptive_h=True,
-            wall_normals=nrm, smooth_hoop=True, no_penetration=self.no_penetration)
+            wall_normals=nrm, smooth_hoop=True, no_penetration=self.no_penetration,
+            surface_tension=self.sigma_st)
         self.nrm = nrm
         wl = np.flatnonzero(kind == WALL)
         self._walls = wl
