@@ -41,6 +41,10 @@ CASES = {
 }
 
 
+#: fraction of the maximum the diameter must fall to for the maximum to count as reached
+FALL = 0.97
+
+
 class _Done(Exception):
     pass
 
@@ -74,7 +78,7 @@ def run(case, n, tc=4.0, verbose=True, adaptive_h=False):
                   f"beta_row {hist[-1][2]:.4f} {time.perf_counter() - t0:.0f} s", flush=True)
         b = np.array([h[1] for h in hist])
         k = int(b.argmax())
-        if b[-1] < 0.97 * b[k] and hist[-1][0] > hist[k][0] + 0.75:
+        if b[-1] < FALL * b[k] and hist[-1][0] > hist[k][0] + 0.75:
             raise _Done
 
     measure(f)
@@ -106,6 +110,12 @@ def table(files, out_dir, theta_deg=90.0):
     by = {}
     for fn in files:
         d = json.load(open(fn))
+        # a maximum counts only once the diameter has fallen FALL below it afterwards (the
+        # runs' own stop criterion); otherwise (still spreading, a plateau, or a run that
+        # broke off) it is a lower bound
+        b = np.array([row[1] for row in d["history"]])
+        k = int(b.argmax())
+        d["at_end"] = not (b[k:] < FALL * b[k]).any()
         by.setdefault(d["case"], []).append(d)
     names = list(CORRELATIONS)
     head = ("| case | We | Re | D/dx | beta_max (colour) | t_max / t_c | s per run | "
@@ -119,8 +129,7 @@ def table(files, out_dir, theta_deg=90.0):
         ns = [d["n"] for d in runs]
         b = [d["beta_max"] for d in runs]
         est, e = "-", None
-        # a maximum at the last frame (run ended or broke off while spreading) is only a
-        # lower bound: such levels stay out of the extrapolation
+        # lower bounds stay out of the extrapolation
         ok = [(n, x) for n, x, d in zip(ns, b, runs, strict=True) if not d["at_end"]]
         if len(ok) >= 3:
             e = richardson([dc.D / n for n, _ in ok], [x for _, x in ok])
