@@ -151,7 +151,8 @@ def plots(runs: list[dict]) -> None:
                            [r["peak_wall_pressure"]["p_Pa"] / 1e6 for r in sel],
                            marker=marks.get(D, "x"), label=lab)
             ax[1].plot([c0_of(r) for r in sel], [r["peak_von_mises_Pa"] / 1e6 for r in sel],
-                       marker=marks.get(D, "x"), ls="--" if dyn else "-", label=lab)
+                       marker=marks.get(D, "x"), ls="none" if dyn else "-", mfc="none" if dyn
+                       else None, ms=10 if dyn else 6, label=lab)
         full = sorted([r for r in runs if round(r["D_over_dx"]) == D and not r["mech_only"]
                        and not r["dynamic"]], key=c0_of)
         if full:
@@ -159,7 +160,7 @@ def plots(runs: list[dict]) -> None:
                        marker=marks.get(D, "x"), ls=":", label=f"D/dx = {D}, with thermal")
     ax[0].set(xlabel="c0 [m/s]", ylabel="peak wall pressure [MPa]", title="wall pressure")
     ax[1].set(xlabel="c0 [m/s]", ylabel="peak von Mises [MPa]",
-              title="substrate: mechanical load alone (solid, dashed) and with thermal")
+              title="substrate (open: dynamic; dotted: with thermal)")
     for a in ax:
         a.grid(alpha=0.3)
         a.legend(fontsize=7)
@@ -169,17 +170,17 @@ def plots(runs: list[dict]) -> None:
     fig, ax = plt.subplots(1, 2, figsize=(10, 4), sharey=False)
     for i, mech in enumerate((True, False)):
         for r in sorted(runs, key=lambda r: (r["D_over_dx"], c0_of(r), bool(r["dynamic"]))):
-            if r["mech_only"] != mech or c0_of(r) != C_WATER:
+            if r["mech_only"] != mech or (mech and c0_of(r) != C_WATER):
                 continue
             t1 = first_load_time(r)
             t = [(p[0] - t1) * 1e9 for p in r["impact_point"]]
             vm = [p[1] / 1e6 for p in r["impact_point"]]
-            lab = (f"D/dx = {r['D_over_dx']:.0f}, "
+            lab = (f"D/dx = {r['D_over_dx']:.0f}, c0 = {c0_of(r):.0f}, "
                    + (f"HHT {r['hht_alpha']:g}" if r["dynamic"] else "quasi-static"))
             ax[i].plot(t, vm, ls="--" if r["dynamic"] else "-", label=lab)
         ax[i].set(xlabel="t - t_1 [ns]", ylabel="von Mises at the impact point [MPa]",
                   title=("mechanical load alone" if mech else "mechanical + thermal")
-                  + ", c0 = 1480 m/s")
+                  + (", c0 = 1480 m/s" if mech else ""))
         ax[i].grid(alpha=0.3)
         ax[i].legend(fontsize=7)
         ax[i].set_xlim(-20, None)
