@@ -2,7 +2,8 @@
 
     python docs/validation/c0_study/report.py [--runs DIR] [--backfill]
 
-prints the markdown tables (peaks per run; the quasi-static check) and writes
+prints the markdown tables (peaks per run; the quasi-static check; dynamic / quasi-static
+with depth), puts them into README.md (for the committed ``runs/``) and writes
 ``peaks_vs_c0.png`` and ``dynamic_vs_quasi_static.png`` next to this file.
 """
 
@@ -188,6 +189,17 @@ def plots(runs: list[dict]) -> None:
     fig.savefig(HERE / "dynamic_vs_quasi_static.png", dpi=120)
 
 
+def fill_readme(tables: dict) -> None:
+    """Put each table between ``<!-- name -->`` and ``<!-- /name -->`` in README.md."""
+    path = HERE / "README.md"
+    text = path.read_text()
+    for name, table in tables.items():
+        head, tail = f"<!-- {name} -->", f"<!-- /{name} -->"
+        i, j = text.index(head) + len(head), text.index(tail)
+        text = text[:i] + "\n" + table + "\n" + text[j:]
+    path.write_text(text)
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser()
     ap.add_argument("--runs", type=Path, default=HERE / "runs")
@@ -197,11 +209,10 @@ def main(argv=None) -> int:
     if a.backfill:
         backfill(a.runs)
     runs = load(a.runs)
-    print(peaks_table(runs))
-    print()
-    print(check_table())
-    print()
-    print(depth_table(runs))
+    tables = {"peaks": peaks_table(runs), "check": check_table(), "depth": depth_table(runs)}
+    print("\n\n".join(tables.values()))
+    if a.runs == HERE / "runs":
+        fill_readme(tables)
     plots(runs)
     return 0
 
