@@ -136,3 +136,10 @@ def test_sweep_resumes_and_tabulates(study, scene, tmp_path, monkeypatch):
     rows = study.sweep(scene, out, ["speed=10,50", "material=glass"], table_only=True,
                        table_dir=tmp_path / "t2")
     assert ran == [] and [r["speed_m_s"] for r in rows] == [10.0]
+
+
+def test_sustained_peak_leaves_out_single_step_spikes(study):
+    """max_i min(v_i, v_i+1): a one-step spike does not count, a two-step plateau does."""
+    assert study.sustained_peak([1.0, 2.0, 9.0, 2.5, 3.0, 3.0, 1.0]) == 3.0
+    assert study.sustained_peak([1.0, 5.0, 5.0, 1.0]) == 5.0
+    assert study.sustained_peak([None, 4.0]) is None
