@@ -64,3 +64,10 @@ def test_within_uses_error_bar():
 def test_bad_input(bad, msg):
     with pytest.raises(ValueError, match=msg):
         richardson(*bad)
+
+
+def test_implausible_order_is_not_asymptotic():
+    """Differences shrinking by 2^10 per halving are chance, not an order of 10."""
+    est = richardson([4, 2, 1], [2.5, 1.96, 1.96 - 0.54 / 2**10])
+    assert not est.asymptotic and "implausible" in est.note
+    assert est.error_bar == pytest.approx(3.0 * 0.54, rel=0.01)

@@ -25,7 +25,9 @@ converged one, in the sense of Roache's 95 % coverage.  Oscillatory (s < 0) or d
 (|e_32| >= |e_21| for a refinement) sequences are not in the asymptotic range: then no order
 is claimed, f_0 is the finest value and the error bar is the sequence's full spread
 max f - min f of the last three levels times F_s = 3 (Roache's factor for an unverified
-order), flagged ``asymptotic = False``.  Equal values (e_21 = e_32 = 0) are converged to
+order), flagged ``asymptotic = False``; so is an observed order above 5 (``MAX_ORDER``: no
+SPH/FEM figure converges that fast; such an order comes from a coarse difference that
+happens to be much larger than the fine one).  Equal values (e_21 = e_32 = 0) are converged to
 round-off.
 
 With more than three levels the last three are used for (2)-(3) and the order of every
@@ -43,6 +45,9 @@ __all__ = ["RichardsonEstimate", "observed_order", "richardson"]
 FS_VERIFIED = 1.25
 #: ... and without one (oscillatory or divergent sequence)
 FS_UNVERIFIED = 3.0
+#: an observed order above this is taken as a sign that the levels are not in the
+#: asymptotic range (two nearly equal differences by chance), not as a real order
+MAX_ORDER = 5.0
 
 
 @dataclass
@@ -130,9 +135,11 @@ def richardson(h, f) -> RichardsonEstimate:
     if abs(f3 - f2) <= 1e-13 * scale and abs(f2 - f1) <= 1e-13 * scale:
         return RichardsonEstimate(f3, 0.0, None, f3, 0.0, True, orders,
                                   "converged to round-off")
-    if p is None:
+    if p is None or p > MAX_ORDER:
         spread = max(f1, f2, f3) - min(f1, f2, f3)
-        kind = ("oscillatory" if (f3 - f2) * (f2 - f1) < 0 else "not converging")
+        kind = ("oscillatory" if (f3 - f2) * (f2 - f1) < 0 else
+                f"observed order {p:.1f} > {MAX_ORDER:g}, implausible" if p is not None
+                else "not converging")
         return RichardsonEstimate(f3, FS_UNVERIFIED * spread, None, f3, float("nan"), False,
                                   orders, f"{kind}: no order; error bar = 3 x spread")
     rf = h2 / h3
