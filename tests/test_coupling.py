@@ -361,3 +361,31 @@ def test_shear_transfer_accuracy_criterion_can_fail():
     assert err(mu_scale=1.1)[0] > STARTUP_TOL
     shallow, un = err(depth_over_R=0.4)
     assert shallow > STARTUP_TOL and un > 0.0
+
+
+def test_history_is_written_at_vtu_times_and_at_the_end_not_every_solve(tmp_path, cache,
+                                                                         monkeypatch):
+    """The substrate history (history.json, probes.csv) is rewritten at the VTU times, at
+    most every HISTORY_FLUSH_S wall seconds and when the summary is written, not at every
+    solve (that was quadratic in the number of solves), and in the end holds every solve."""
+    from coupling.driver import CouplingDriver
+    from sphfem.api import run
+    from sphfem.scene import parse_scene_toml
+
+    writes = []
+    orig = CouplingDriver.write_history
+
+    def counting(self, folder):
+        writes.append(len(self.history))
+        return orig(self, folder)
+
+    monkeypatch.setattr(CouplingDriver, "write_history", counting)
+    monkeypatch.setattr(CouplingDriver, "HISTORY_FLUSH_S", 1e9)
+    res = run(parse_scene_toml(HOT), tmp_path / "out")
+    d = res.summary["diagnostics"]["coupling"]
+    assert d["solves"] >= 4
+    assert len(writes) <= d["vtu_written"] + 2 < d["solves"] + 1
+    hist = json.loads((tmp_path / "out" / "substrate" / "history.json").read_text())
+    assert len(hist["history"]) == d["solves"]
+    rows = (tmp_path / "out" / "substrate" / "probes.csv").read_text().strip().splitlines()
+    assert len(rows) == d["solves"] + 1
