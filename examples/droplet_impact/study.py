@@ -521,7 +521,7 @@ def plot_sweep(rows: list[dict], path: Path) -> None:
     panels = (("max_spreading", "max spreading D_max / D"),
               ("heat_over_ideal", "heat into substrate / ideal contact heat"),
               ("T_impact_rise_over_ideal", "impact-point rise / ideal contact rise"),
-              ("peak_von_mises_MPa", "peak von Mises [MPa]"))
+              ("sustained_von_mises_MPa", "peak von Mises held 2 coupling steps [MPa]"))
     mats = list(dict.fromkeys(r["material"] for r in rows))
     temps = sorted({r["droplet_T_C"] for r in rows})
     fig, axes = plt.subplots(2, 2, figsize=(10, 7.5), layout="constrained")
