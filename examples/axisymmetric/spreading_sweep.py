@@ -174,7 +174,7 @@ def table(files, out_dir, theta_deg=90.0):
             ax.errorbar(i + 0.3, e.finest, yerr=e.error_bar, fmt="none", ecolor="r", capsize=3)
             ax.plot(i + 0.3, e.value, "rx")
     ax.plot([], [], "k.", label="SPH axisymmetric (label: D/dx)")
-    ax.plot([], [], "k^", label="SPH, lower bound (still spreading at the run's end)")
+    ax.plot([], [], "k^", label="SPH, lower bound (no 3 % fall after the maximum)")
     ax.plot([], [], "rx", label="Richardson limit (bar: GCI band about the finest level)")
     ax.set_xlim(-0.5, len(pts) - 0.4)
     ax.set_xticks(idx, [f"We {p[0]:.0f}\nRe {p[1]:.0f}" for p in pts])
