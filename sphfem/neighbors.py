@@ -143,6 +143,10 @@ def _make_grid(n, radius, lo, hi, period, cells_per_radius) -> _Grid:
             width[K] = per[K] / ncell[K]
         else:  # particles outside [lo, hi] are clamped into the edge cells
             span[K] = max(hi[k] - lo[k], 0.0)
+            if not np.isfinite(span[K]):
+                raise ValueError(f"the bounds of axis {k} span an infinite range "
+                                 f"(lo {lo[k]:g}, hi {hi[k]:g}): positions that far apart "
+                                 "mean a particle was thrown out (a blow-up)")
             width[K] = cw
             ncell[K] = int(min(np.floor(span[K] / cw), 2**40)) + 1
     # cap the cell count (a huge domain with few particles): widen the busiest axis

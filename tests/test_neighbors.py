@@ -357,3 +357,15 @@ def test_kind_filter_deterministic_across_threads():
     off, idx = reference_csr(x, 0.07, period, kind, VIEW_KEEP)
     assert np.array_equal(out[0].offsets, off)
     assert np.array_equal(out[0].indices, idx)
+
+
+def test_infinite_span_is_a_clear_error():
+    """A particle thrown to ~1e308 (a blow-up) gives a ValueError naming the axis, not an
+    OverflowError from the cell count."""
+    import pytest
+
+    from sphfem.neighbors import build_neighbor_list
+
+    x = np.array([[0.0, 0.0], [1.0, 0.0], [-1.7e308, 1.0], [1.7e308, 1.0]])
+    with pytest.raises(ValueError, match="axis 0 span an infinite range"):
+        build_neighbor_list(x, 1.0, x.min(axis=0), x.max(axis=0))

@@ -101,7 +101,9 @@ def build_reference(X, vol, R: float, kernel: str = "wendland_c2", period=None,
     if X.ndim != 2 or X.shape[1] not in (2, 3):
         raise ValueError(f"TL-SPH positions must have shape (n, 2) or (n, 3), got {X.shape}")
     n, dim = X.shape
-    vol = np.ascontiguousarray(np.broadcast_to(np.asarray(vol, float), (n,)))
+    # a writable copy: a read-only view (broadcast_to of an array) would make numba compile
+    # a second, read-only specialisation of the kernels (~12-16 s of CPU in the test suite)
+    vol = np.array(np.broadcast_to(np.asarray(vol, float), (n,)), dtype=np.float64)
     period = np.zeros(dim) if period is None else np.asarray(period, float)
     code = kernels.kernel_code(kernel)
     sigma = kernels.kernel_sigma(code, dim, R)
