@@ -499,7 +499,8 @@ def write_tables(rows: list[dict], folder: Path) -> None:
             ("peak_von_mises_t_after_contact_over_tc",
                                                 "vM t/tc"),
             ("peak_von_mises_r_um", "vM r um"), ("peak_von_mises_z_um", "vM z um"),
-            ("setup_s", "set-up s"), ("wall_s", "stepping s"), ("status", "status")]
+            ("setup_s", "set-up s"), ("wall_s", "stepping s"), ("status", "status"),
+            ("t_end_over_tc", "reached t/tc")]
     lines = ["| " + " | ".join(c[1] for c in cols) + " |",
              "|" + "---|" * len(cols)]
     for r in rows:
