@@ -142,7 +142,8 @@ def _make_grid(n, radius, lo, hi, period, cells_per_radius) -> _Grid:
             ncell[K] = max(1, int(np.floor(per[K] / cw)))
             width[K] = per[K] / ncell[K]
         else:  # particles outside [lo, hi] are clamped into the edge cells
-            span[K] = max(hi[k] - lo[k], 0.0)
+            with np.errstate(over="ignore"):  # an overflow is reported just below
+                span[K] = max(hi[k] - lo[k], 0.0)
             if not np.isfinite(span[K]):
                 raise ValueError(f"the bounds of axis {k} span an infinite range "
                                  f"(lo {lo[k]:g}, hi {hi[k]:g}): positions that far apart "
