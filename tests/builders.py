@@ -118,3 +118,13 @@ def isolated_cache(tmp_path_factory):
     mp.setenv("SPHFEM_CACHE", str(tmp_path_factory.mktemp("cache")))
     yield
     mp.undo()
+
+
+def load_example(path, name: str):
+    """Import the example script at ``path`` as module ``name`` (examples are not a package)."""
+    import importlib.util
+
+    spec = importlib.util.spec_from_file_location(name, path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod

@@ -9,7 +9,6 @@ error.
 from __future__ import annotations
 
 import copy
-import importlib.util
 import json
 import tomllib
 from pathlib import Path
@@ -21,10 +20,9 @@ EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "droplet_impact"
 
 @pytest.fixture(scope="module")
 def study():
-    spec = importlib.util.spec_from_file_location("droplet_study", EXAMPLE / "study.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    from builders import load_example
+
+    return load_example(EXAMPLE / "study.py", "droplet_study")
 
 
 def _toml(data: dict) -> str:

@@ -5,7 +5,6 @@ case would run."""
 from __future__ import annotations
 
 import csv
-import importlib.util
 import json
 from pathlib import Path
 
@@ -16,10 +15,9 @@ EXAMPLE = Path(__file__).resolve().parents[1] / "examples" / "droplet_impact"
 
 @pytest.fixture(scope="module")
 def study():
-    spec = importlib.util.spec_from_file_location("droplet_study_sweep", EXAMPLE / "study.py")
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    from builders import load_example
+
+    return load_example(EXAMPLE / "study.py", "droplet_study_sweep")
 
 
 @pytest.fixture(scope="module")
