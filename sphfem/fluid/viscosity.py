@@ -8,7 +8,9 @@ model either is *fused*, its pair term computed inside the WCSPH force pass
 (:func:`sphfem.fluid.passes.fluid_forces`, which then reads ``mu``), or adds its own pass
 after the WCSPH forces (``accelerate``, like a surface-tension method): it adds its
 acceleration to the fluid rows of ``acc`` and the reaction to the wall rows of ``f_fluid``.
-The viscous time-step limit ``visc_cfl h^2 min(rho/mu)`` applies to every model.
+The viscous time-step limit ``visc_cfl h^2 min(rho/mu)`` applies to every model that is
+not ``implicit`` (an implicit model solves for the viscous velocity change itself; the
+step then comes from the other limits).
 
 Each model lives in one module named after its paper and registers a
 :class:`ViscosityMethod` at import (kept as the module's ``METHOD``).  Adding a model: a
@@ -42,6 +44,8 @@ class ViscosityMethod:
                 ``solver.p.acc`` (fluid rows) and the reaction force to ``solver.p.f_fluid``
                 (wall rows) after the WCSPH forces; ``state`` (None at first) is the
                 model's work arrays, kept by the solver between evaluations
+    implicit    True: the model integrates the viscous term implicitly over the step
+                ``solver.step_dt`` (no viscous time-step limit)
     """
 
     name: str
@@ -49,6 +53,7 @@ class ViscosityMethod:
     params: tuple
     fused: bool
     accelerate: Callable | None = None
+    implicit: bool = False
 
 
 #: the registry (:class:`sphfem.methods.MethodRegistry`) of ``[fluid] viscosity``

@@ -23,7 +23,8 @@ predictor-corrector form of DualSPHysics, one force evaluation per step, second 
 ``surface_tension`` (:mod:`~sphfem.fluid.surface_tension`).
 
 Time-step limits (h = R/2), each reported by name: acoustic ``cfl h / (c0 + |v|max)``,
-viscous ``visc_cfl h^2 min(rho/mu)``, force ``force_cfl sqrt(h / |a|max)``.
+viscous ``visc_cfl h^2 min(rho/mu)`` (not with an implicit viscosity model: it asks the
+model's ``implicit``), force ``force_cfl sqrt(h / |a|max)``.
 
 Neighbours: the context's list (:class:`~sphfem.context.StepContext`), asked for after every
 drift; stand-alone, the Verlet list of :mod:`sphfem.fluid.standalone` (radius R (1 + skin),
@@ -262,6 +263,7 @@ class FluidSolver:
         self.wall_method = walls.lookup(self.params.walls)
         self.visc_method = viscosity.lookup(self.params.viscosity)
         self._visc_state = None  # work arrays of a viscosity model with its own pass
+        self.step_dt = None  # length of the step being taken (None before the first)
         mu = particles.mu
         fl = particles.kind == FLUID
         if self.visc_method is None:  # inviscid
@@ -437,7 +439,7 @@ class FluidSolver:
         with _threads(self.nthreads):
             vmax, amax, rho_mu = _fluid_maxima(p.v, p.acc, p.rho, p.mu, p.kind)
         lim = {"acoustic": pa.cfl * self.h / (pa.c0 + vmax)}
-        if np.isfinite(rho_mu):
+        if np.isfinite(rho_mu) and not getattr(self.visc_method, "implicit", False):
             lim["viscous"] = pa.visc_cfl * self.h * self.h * rho_mu
         if amax > 0:
             lim["force"] = pa.force_cfl * math.sqrt(self.h / amax)
@@ -459,6 +461,7 @@ class FluidSolver:
 
     def _step(self, dt: float) -> None:
         self._sync_neighbors()
+        self.step_dt = dt
         self.pressure_method.advance(self, dt)
         p, s = self.p, self._scratch
         t0 = time.perf_counter()
@@ -544,6 +547,8 @@ class FluidSolver:
                 "rho_ratio_band": list(pa.rho_ratio_band),
             },
             "wall_s": dict(self.wall),
+            "viscosity_solve": (self._visc_state.to_dict()
+                                if hasattr(self._visc_state, "to_dict") else None),
         }
 
 
