@@ -9,12 +9,12 @@ properties of the fluid (``rho0``, ``c0``, ``mu``, ``sigma``) come from the
 
 from __future__ import annotations
 
-from sphfem.fluid import integrators, pressure, surface_tension, viscosity, walls
+from sphfem.fluid import integrators, pressure, rheology, surface_tension, viscosity, walls
 from sphfem.schema import VECTOR, Param, Section
 
 #: the [fluid] keys that choose a method -> their registry (sphfem.methods.MethodRegistry)
 REGISTRIES = {m.REGISTRY.key: m.REGISTRY
-              for m in (pressure, viscosity, surface_tension, walls, integrators)}
+              for m in (pressure, viscosity, rheology, surface_tension, walls, integrators)}
 
 
 def _choice(registry, default: str | None = None, doc: str = "") -> tuple:
@@ -37,6 +37,11 @@ def _check(rec, ctx, path):
     lo, hi = rec.rho_ratio_band
     if not 0.0 < lo < 1.0 < hi:
         ctx.error(f"{path}.rho_ratio_band", f"expected 0 < lo < 1 < hi, got [{lo:g}, {hi:g}]")
+    if rec.rheology != "newtonian" and rec.viscosity == "none":
+        ctx.error(f"{path}.rheology", f"rheology = \"{rec.rheology}\" needs a viscosity "
+                                      "model (viscosity = \"none\" is inviscid)")
+    for key in rheology.missing_keys(rec):
+        ctx.error(f"{path}.{key}", f"missing: rheology = \"{rec.rheology}\" needs {key}")
     names, mats = _fluid_materials(ctx)
     if not names:
         ctx.error("physics.modules", "the fluid module needs at least one block of kind "
@@ -48,7 +53,7 @@ def _check(rec, ctx, path):
         if m.c0 is None:
             ctx.error(f"{where}.c0", "missing: a fluid material needs the artificial speed of "
                                      "sound c0 [m/s] (>= 10 x the largest expected speed)")
-        if rec.viscosity != "none" and m.mu is None:
+        if rec.viscosity != "none" and rec.rheology == "newtonian" and m.mu is None:
             ctx.error(f"{where}.mu", f"missing: viscosity = \"{rec.viscosity}\" needs the "
                                      "dynamic viscosity mu [Pa s] (or set [fluid] viscosity "
                                      "= \"none\")")
@@ -76,6 +81,8 @@ FLUID = Section("fluid", (
               "renormalised density gradient; 0 = off)"),
     *_choice(viscosity, "laminar", doc="viscosity model (each fluid particle's material "
                                        "mu)"),
+    *_choice(rheology, "newtonian", doc="apparent viscosity mu(gamma_dot) of each fluid "
+                                        "particle, updated every evaluation"),
     Param("alpha", float, 0.0, ge=0.0,
           doc="artificial viscosity coefficient (Monaghan 1992 in the always-on form of "
               "Marrone et al. 2011, pair coefficient alpha h c0, h = R/2; 0 = off, "

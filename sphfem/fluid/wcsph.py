@@ -49,6 +49,7 @@ from sphfem.fluid import (
     integrators,
     passes,
     pressure,
+    rheology,
     surface,
     surface_tension,
     viscosity,
@@ -150,6 +151,8 @@ def fluid_fields(params: FluidParams | None = None) -> dict:
     out = dict(FIELDS)
     if params is not None and params.uses_free_surface:
         out.update(FS_FIELDS)
+    if params is not None and params.rheology != "newtonian":
+        out.update(rheology.FIELDS)
     return out
 
 
@@ -263,6 +266,7 @@ class FluidSolver:
         self.wall_method = walls.lookup(self.params.walls)
         self.visc_method = viscosity.lookup(self.params.viscosity)
         self._visc_state = None  # work arrays of a viscosity model with its own pass
+        self.rheology = rheology.lookup(self.params.rheology)  # mu(gamma_dot) per particle
         self.step_dt = None  # length of the step being taken (None before the first)
         mu = particles.mu
         fl = particles.kind == FLUID
@@ -398,6 +402,7 @@ class FluidSolver:
         passes.prepare_fluid(p.rho, p.m, p.v, p.kind, pa.rho0, self.B, pa.gamma, p.p, s.vg)
         self.wall_method.wall_state(self, g)  # the registered wall model
         passes.prepare_all(p.rho, p.p, p.m, p.vol, p.kind, s.pr, s.V, s.meff, s.isf)
+        rheology.update_viscosity(self)  # apparent viscosity mu_i (Newtonian: nothing)
         if not eos:  # forces without pressure: p / rho^2 = 0 in the pass, p stays the method's
             s.pr[:] = 0.0
             p.p[:] = p_own
