@@ -61,25 +61,34 @@ def poiseuille_series(y, t, L, nu, F, terms: int = 200):
     return u
 
 
+def channel(n_across: int, L: float, rho0: float, Lx: float | None = None):
+    """Plane channel 0 < y < L, periodic in x: a cell-centred fluid lattice of ``n_across``
+    particles across L and LAYERS wall layers on each side; the periodic length ``Lx``
+    (default max(L, 8 dx), > 2 list radii) is rounded up to whole spacings.  Returns
+    (particles, lo, hi, period)."""
+    dx = L / n_across
+    Lx = max(L, 8 * SUPPORT * dx / 3.0) if Lx is None else Lx  # > 2 list radii
+    Lx = dx * math.ceil(Lx / dx)
+    xf = lattice([0.0, 0.0], [Lx, L], dx)
+    xw_lo = lattice([0.0, -LAYERS * dx], [Lx, 0.0], dx)
+    xw_hi = lattice([0.0, L], [Lx, L + LAYERS * dx], dx)
+    ps = make_particles(xf, np.concatenate([xw_lo, xw_hi]), dx, rho0)
+    lo = [0.0, -(LAYERS + 1) * dx]
+    hi = [Lx, L + (LAYERS + 1) * dx]
+    return ps, lo, hi, [Lx, 0.0]
+
+
 def run_poiseuille(n_across: int, t_over_tnu=(0.5,), L: float = 1e-3, nu: float = 1e-6,
                    F: float = 2e-4, rho0: float = 1000.0, **fluid):
     """One channel run with ``n_across`` particles across L, sampled at the times
     ``t_over_tnu`` (in units of L^2/nu, ascending); returns (profiles, solver) with
     ``profiles[k] = (t, y, u)`` of the fluid particles at the k-th time.  ``fluid``: further
     :class:`FluidParams` (e.g. ``viscosity="morris"``)."""
-    dx = L / n_across
-    Lx = max(L, 8 * SUPPORT * dx / 3.0)  # > 2 list radii
-    Lx = dx * math.ceil(Lx / dx)
-    xf = lattice([0.0, 0.0], [Lx, L], dx)
-    xw_lo = lattice([0.0, -LAYERS * dx], [Lx, 0.0], dx)
-    xw_hi = lattice([0.0, L], [Lx, L + LAYERS * dx], dx)
-    ps = make_particles(xf, np.concatenate([xw_lo, xw_hi]), dx, rho0)
+    ps, lo, hi, period = channel(n_across, L, rho0)
     u_max = F * L**2 / (8 * nu)
     par = FluidParams(rho0=rho0, c0=400 * u_max, mu=nu * rho0, gravity=(F, 0.0), delta=0.1,
                       **fluid)
-    lo = [0.0, -(LAYERS + 1) * dx]
-    hi = [Lx, L + (LAYERS + 1) * dx]
-    s = FluidSolver(ps, SUPPORT * dx, lo, hi, period=[Lx, 0.0], params=par)
+    s = FluidSolver(ps, SUPPORT * L / n_across, lo, hi, period=period, params=par)
     profiles = []
     for tt in np.atleast_1d(t_over_tnu):
         s.run(float(tt) * L**2 / nu)
