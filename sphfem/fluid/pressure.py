@@ -62,6 +62,8 @@ def projection_advance(solver, dt: float) -> None:
     solver.wall["integrate"] += time.perf_counter() - t0
     solver.after_drift()
     solver.evaluate(solver.t + dt)
+    if method.finish is not None:  # e.g. its pressure reaction on the walls into f_fluid
+        method.finish(solver, solver.pressure_state)
 
 
 @dataclass(frozen=True)
@@ -74,6 +76,8 @@ class PressureMethod:
     advance  ``(solver, dt) -> None``: one time step of the fluid particles (a projection
              method's is :func:`projection_advance`)
     solve    ``(solver, dt, state) -> state``: a projection method's pressure solve
+    finish   ``(solver, state) -> None``: a projection method's last word after the forces
+             without pressure at x^{n+1} (which rewrote the walls' ``f_fluid``)
     """
 
     name: str
@@ -81,6 +85,7 @@ class PressureMethod:
     params: tuple
     advance: Callable | None = None
     solve: Callable | None = None
+    finish: Callable | None = None
 
     def __post_init__(self):
         if (self.advance is None) == (self.solve is None):

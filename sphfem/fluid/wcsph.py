@@ -22,7 +22,8 @@ predictor-corrector form of DualSPHysics, one force evaluation per step, second 
 (:mod:`~sphfem.fluid.viscosity`; "laminar": the term above, fused into the force pass) and
 ``surface_tension`` (:mod:`~sphfem.fluid.surface_tension`).
 
-Time-step limits (h = R/2), each reported by name: acoustic ``cfl h / (c0 + |v|max)``,
+Time-step limits (h = R/2), each reported by name: acoustic ``cfl h / (c0 + |v|max)`` (a
+pressure projection, IISPH / DFSPH: ``cfl h / |v|max`` instead, named cfl),
 viscous ``visc_cfl h^2 min(rho/mu)`` (not with an implicit viscosity model: it asks the
 model's ``implicit``), force ``force_cfl sqrt(h / |a|max)``.
 
@@ -443,7 +444,10 @@ class FluidSolver:
         p, pa = self.p, self.params
         with _threads(self.nthreads):
             vmax, amax, rho_mu = _fluid_maxima(p.v, p.acc, p.rho, p.mu, p.kind)
-        lim = {"acoustic": pa.cfl * self.h / (pa.c0 + vmax)}
+        if self.pressure_method.eos:
+            lim = {"acoustic": pa.cfl * self.h / (pa.c0 + vmax)}
+        else:  # a pressure projection: the CFL condition of the flow, no speed of sound
+            lim = {"cfl": pa.cfl * self.h / vmax} if vmax > 0 else {}
         if np.isfinite(rho_mu) and not getattr(self.visc_method, "implicit", False):
             lim["viscous"] = pa.visc_cfl * self.h * self.h * rho_mu
         if amax > 0:
@@ -554,6 +558,8 @@ class FluidSolver:
             "wall_s": dict(self.wall),
             "viscosity_solve": (self._visc_state.to_dict()
                                 if hasattr(self._visc_state, "to_dict") else None),
+            "pressure_solve": (self.pressure_state.to_dict()
+                               if hasattr(self.pressure_state, "to_dict") else None),
         }
 
 
