@@ -171,41 +171,57 @@ def strain_rate(x, u, V, kind, offsets, indices, R, sigma, kernel_code, period, 
         ok[i] = True
         if kind[i] != FLUID:
             continue
-        m = np.zeros((3, 3))
-        g = np.zeros((3, 3))  # g[a, b] = sum_j V_j F (u_j - u_i)_a r_b
+        m00 = m01 = m02 = m11 = m12 = m22 = 0.0
+        # g_ab = sum_j V_j F (u_j - u_i)_a r_b
+        g00 = g01 = g02 = g10 = g11 = g12 = g20 = g21 = g22 = 0.0
         for jj in range(offsets[i], offsets[i + 1]):
             j = indices[jj]
             if kind[j] != FLUID:
                 continue
-            r = pair_sep(x, i, j, dim, period, periodic)
-            d2 = r[0] * r[0] + r[1] * r[1] + r[2] * r[2]
+            r0, r1, r2 = pair_sep(x, i, j, dim, period, periodic)
+            d2 = r0 * r0 + r1 * r1 + r2 * r2
             if d2 >= R2 or d2 == 0.0:
                 continue
             w = V[j] * grad_factor(math.sqrt(d2), R, fac2, kernel_code)
-            for a in range(dim):
-                du = u[j, a] - u[i, a]
-                for b in range(dim):
-                    m[a, b] += w * r[a] * r[b]
-                    g[a, b] += w * du * r[b]
+            m00 += w * r0 * r0
+            m01 += w * r0 * r1
+            m02 += w * r0 * r2
+            m11 += w * r1 * r1
+            m12 += w * r1 * r2
+            m22 += w * r2 * r2
+            du0 = w * (u[j, 0] - u[i, 0])
+            du1 = w * (u[j, 1] - u[i, 1]) if dim > 1 else 0.0
+            du2 = w * (u[j, 2] - u[i, 2]) if dim > 2 else 0.0
+            g00 += du0 * r0
+            g01 += du0 * r1
+            g02 += du0 * r2
+            g10 += du1 * r0
+            g11 += du1 * r1
+            g12 += du1 * r2
+            g20 += du2 * r0
+            g21 += du2 * r1
+            g22 += du2 * r2
         good, b00, b01, b02, b10, b11, b12, b20, b21, b22 = invert_sym3(
-            m[0, 0], m[0, 1], m[0, 2], m[1, 1], m[1, 2], m[2, 2], dim, cond_max)
-        B = np.eye(3)
-        if good:
-            B[0, 0], B[0, 1], B[0, 2] = b00, b01, b02
-            B[1, 0], B[1, 1], B[1, 2] = b10, b11, b12
-            B[2, 0], B[2, 1], B[2, 2] = b20, b21, b22
-        else:
+            m00, m01, m02, m11, m12, m22, dim, cond_max)
+        if not good:  # the plain gradient
             ok[i] = False
-        s = 0.0  # 2 D:D with L = g B (B symmetric)
-        for a in range(dim):
-            for b in range(dim):
-                la = 0.0
-                lb = 0.0
-                for c in range(dim):
-                    la += g[a, c] * B[c, b]
-                    lb += g[b, c] * B[c, a]
-                s += 0.5 * (la + lb) * (la + lb)
-        gd[i] = math.sqrt(s)
+            b00, b01, b02, b10, b11, b12, b20, b21, b22 = 1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, \
+                0.0, 1.0
+        # L = g B (B symmetric); 2 D:D = sum_ab (L_ab + L_ba)^2 / 2
+        l00 = g00 * b00 + g01 * b10 + g02 * b20
+        l01 = g00 * b01 + g01 * b11 + g02 * b21
+        l02 = g00 * b02 + g01 * b12 + g02 * b22
+        l10 = g10 * b00 + g11 * b10 + g12 * b20
+        l11 = g10 * b01 + g11 * b11 + g12 * b21
+        l12 = g10 * b02 + g11 * b12 + g12 * b22
+        l20 = g20 * b00 + g21 * b10 + g22 * b20
+        l21 = g20 * b01 + g21 * b11 + g22 * b21
+        l22 = g20 * b02 + g21 * b12 + g22 * b22
+        s01 = l01 + l10
+        s02 = l02 + l20
+        s12 = l12 + l21
+        gd[i] = math.sqrt(2.0 * (l00 * l00 + l11 * l11 + l22 * l22)
+                          + s01 * s01 + s02 * s02 + s12 * s12)
 
 
 # ----------------------------------------------------------------------------- the hook
