@@ -29,6 +29,7 @@ from sphfem.methods import MethodRegistry
 METHOD_MODULES = (
     "sphfem.fluid.viscosity_laminar_shao2003",
     "sphfem.fluid.viscosity_morris1997",
+    "sphfem.fluid.viscosity_implicit_weiler2018",
 )
 
 
