@@ -30,6 +30,7 @@ METHOD_MODULES = (
     "sphfem.fluid.viscosity_laminar_shao2003",
     "sphfem.fluid.viscosity_morris1997",
     "sphfem.fluid.viscosity_implicit_weiler2018",
+    "sphfem.fluid.viscosity_semi_implicit_park2019",
 )
 
 
