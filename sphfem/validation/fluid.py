@@ -393,6 +393,28 @@ def rayleigh_period(dim: int, sigma: float, rho: float, R: float, l: int = 2) ->
     return 2 * math.pi / math.sqrt(k * sigma / (rho * R**3))
 
 
+def surface_ripple(x: np.ndarray, dx: float, lmax: int = 4) -> float:
+    """Particle-scale roughness of a 2D drop's surface [units of dx]: in each angular bin
+    (width ~1.5 dx on the outer radius) about the centroid the radius of the outermost
+    particle, r_k(theta_k); the rms of r_k minus its least-squares Fourier series up to mode
+    ``lmax`` (the drop's shape modes: l = 2 and its nonlinear harmonics; l = 1, 3 from a
+    slightly off centroid).  0 for any smooth shape; a ring of particles gives ~0.01."""
+    c = x - x.mean(0)
+    r = np.hypot(c[:, 0], c[:, 1])
+    th = np.arctan2(c[:, 1], c[:, 0])
+    M = max(8, int(2 * math.pi * r.max() / (1.5 * dx)))
+    b = ((th + math.pi) / (2 * math.pi) * M).astype(int) % M
+    best = np.full(M, -1)
+    for k in np.argsort(r):  # ascending radius: the last write per bin is the outermost
+        best[b[k]] = k
+    idx = best[best >= 0]
+    rm, tm = r[idx], th[idx]
+    A = np.column_stack([np.ones_like(tm)] + [f(lm * tm) for lm in range(1, lmax + 1)
+                                             for f in (np.cos, np.sin)])
+    coef, *_ = np.linalg.lstsq(A, rm, rcond=None)
+    return float(np.sqrt(np.mean((rm - A @ coef) ** 2)) / dx)
+
+
 def _zero_crossings(t, D):
     z = []
     for k in range(1, len(D) - 1):
@@ -401,23 +423,45 @@ def _zero_crossings(t, D):
     return np.array(z)
 
 
-def droplet_c0(dim: int, sigma: float, rho: float, Rd: float, v_max: float) -> float:
+def droplet_c0(dim: int, sigma: float, rho: float, Rd: float, v_max: float,
+               p_max: float | None = None) -> float:
     """Artificial speed of sound of the droplet runs: the usual WCSPH rules c0 >= 10 |v|max
-    and a density variation <= 1 % under the Laplace pressure, p_L <= 0.01 rho c0^2."""
-    return max(10.0 * v_max, math.sqrt(100.0 * (dim - 1) * sigma / (rho * Rd)))
+    and a density variation <= 1 % under the largest pressure of the model, p_max <= 0.01
+    rho c0^2 (default p_max: the Laplace pressure (dim - 1) sigma / Rd)."""
+    if p_max is None:
+        p_max = (dim - 1) * sigma / Rd
+    return max(10.0 * v_max, math.sqrt(100.0 * p_max / rho))
+
+
+def droplet_pressures(model: str, dim: int, sigma: float, Rd: float, R: float):
+    """(start pressure, largest pressure) [Pa] of a drop at rest under ``model``: the
+    Laplace pressure, plus for "akinci" the cohesion's internal (virial) pressure, which
+    the EOS balances in the bulk (:func:`sphfem.fluid.surface_tension_akinci2013.
+    internal_pressure`, of order sigma / R_kernel)."""
+    p_L = (dim - 1) * sigma / Rd
+    if model == "akinci":
+        from sphfem.fluid.surface_tension_akinci2013 import internal_pressure
+        p = p_L - internal_pressure(sigma, R, dim)
+        return p, p
+    return p_L, p_L
 
 
 def run_droplet(dim: int, n_radius: int, model: str = "csf", periods: float = 1.6,
                 eps: float = 0.1, Rd: float = 1e-3, rho0: float = 1000.0,
                 sigma: float = 0.072, mu: float = 1e-3, c0: float | None = None,
-                alpha: float = 0.02):
+                alpha: float = 0.02, fluid: dict | None = None, relax: float = 0.0):
     """A disc / sphere of radius Rd (concentric rings / shells of n_radius layers,
     :func:`droplet_packing`), zero gravity, started at the density of the Laplace pressure
     (dim - 1) sigma / Rd and given the l = 2 velocity field of Rayleigh's mode (2D:
     v = V0 (x, -y)/Rd; 3D: v = V0 (-x/2, -y/2, z)/Rd, divergence-free) with V0 = eps omega
     Rd.  The shape moment D = <x^2 - y^2> (3D: <z^2 - (x^2 + y^2)/2>) then oscillates as
     sin(omega t); the period is twice the mean spacing of its zero crossings.  c0 from
-    :func:`droplet_c0` unless given.
+    :func:`droplet_c0` with :func:`droplet_pressures` unless given; ``fluid``: further
+    :class:`FluidParams` keys (e.g. ``st_params``).  ``relax`` > 0: first ``relax``
+    Rayleigh periods at rest under the model (velocities zeroed every T/400, kinetic
+    damping), so that the mode starts from the model's own equilibrium.  The surface ripple
+    (:func:`surface_ripple`) is sampled with D; ``extra`` holds its largest value over the
+    first and over the last third of the run.
 
     Returns (period or nan, Rayleigh period, solver, status message, D / max |D|, extra).
     """
@@ -427,34 +471,54 @@ def run_droplet(dim: int, n_radius: int, model: str = "csf", periods: float = 1.
     xf = droplet_packing(dim, Rd, dx)
     T = rayleigh_period(dim, sigma, rho0, Rd)
     V0 = eps * 2 * math.pi / T * Rd
+    p_start, p_max = droplet_pressures(model, dim, sigma, Rd, SUPPORT * dx)
     if c0 is None:
-        c0 = droplet_c0(dim, sigma, rho0, Rd, V0)
-    rho = density((dim - 1) * sigma / Rd, rho0, c0, 7.0)
+        c0 = droplet_c0(dim, sigma, rho0, Rd, V0, p_max)
+    rho = density(p_start, rho0, c0, 7.0)
     ps = make_particles(xf, None, dx, rho0, np.full(len(xf), rho))
     vol = math.pi * Rd**2 if dim == 2 else 4.0 / 3.0 * math.pi * Rd**3
     ps.m[:] = rho * vol / len(xf)
     ps.add_field("v", dim)
-    if dim == 2:
-        ps.v[:, 0], ps.v[:, 1] = V0 * xf[:, 0] / Rd, -V0 * xf[:, 1] / Rd
-    else:
-        ps.v[:] = V0 * xf * np.array([-0.5, -0.5, 1.0]) / Rd
-    par = FluidParams(rho0=rho0, c0=c0, mu=mu, delta=0.1, alpha=alpha, gravity=(0.0,) * dim,
-                      surface_tension=model, sigma=sigma, rho_ratio_band=(0.5, 2.0))
+
+    def mode(x):
+        if dim == 2:
+            return V0 * np.column_stack([x[:, 0], -x[:, 1]]) / Rd
+        return V0 * x * np.array([-0.5, -0.5, 1.0]) / Rd
+
+    if relax <= 0:
+        ps.v[:] = mode(xf)
+    kw = {"delta": 0.1, "rho_ratio_band": (0.5, 2.0), **(fluid or {})}
+    par = FluidParams(rho0=rho0, c0=c0, mu=mu, alpha=alpha, gravity=(0.0,) * dim,
+                      surface_tension=model, sigma=sigma, **kw)
     s = FluidSolver(ps, SUPPORT * dx, [-2 * Rd] * dim, [2 * Rd] * dim, params=par)
-    ts, Ds = [0.0], [0.0]
+    msg = "completed"
+    if relax > 0:
+        try:
+            s.run(relax * T, callback=lambda sv: sv.p.v.fill(0.0), every=T / 400)
+        except SimulationStopped as e:
+            msg = "relaxation: " + str(e)
+        s.p.v[:] = mode(s.p.x - s.p.x.mean(0))
+        s.t = 0.0
+        s.evaluate()
+
+    def shape(x):
+        x = x - x.mean(0)
+        return (np.mean(x[:, 0] ** 2 - x[:, 1] ** 2) if dim == 2
+                else np.mean(x[:, 2] ** 2 - 0.5 * (x[:, 0] ** 2 + x[:, 1] ** 2)))
+
+    D0 = shape(s.p.x)
+    ts, Ds, rip = [0.0], [0.0], [surface_ripple(s.p.x, dx) if dim == 2 else float("nan")]
 
     def sample(sv):
-        x = sv.p.x - sv.p.x.mean(0)
-        D = (np.mean(x[:, 0] ** 2 - x[:, 1] ** 2) if dim == 2
-             else np.mean(x[:, 2] ** 2 - 0.5 * (x[:, 0] ** 2 + x[:, 1] ** 2)))
         ts.append(sv.t)
-        Ds.append(D)
+        Ds.append(shape(sv.p.x) - D0)
+        rip.append(surface_ripple(sv.p.x, dx) if dim == 2 else float("nan"))
 
-    msg = "completed"
-    try:
-        s.run(periods * T, callback=sample, every=T / 100)
-    except SimulationStopped as e:
-        msg = str(e)
+    if msg == "completed":
+        try:
+            s.run(periods * T, callback=sample, every=T / 100)
+        except SimulationStopped as e:
+            msg = str(e)
     z = _zero_crossings(np.array(ts), np.array(Ds))
     Tm = 2 * float(np.mean(np.diff(z))) if len(z) >= 2 else float("nan")
     Dn = np.array(Ds) / (max(abs(np.array(Ds)).max(), 1e-300))
@@ -463,6 +527,9 @@ def run_droplet(dim: int, n_radius: int, model: str = "csf", periods: float = 1.
              "com_drift_over_R": float(np.abs(s.p.x.mean(0)).max() / Rd),
              "momentum_over_M_V0": float(np.abs(P).max() / (s.p.m.sum() * V0)),
              "Oh": mu / math.sqrt(rho0 * sigma * Rd)}
+    k = max(1, len(rip) // 3)
+    extra["ripple_early_over_dx"] = float(np.max(rip[:k]))
+    extra["ripple_late_over_dx"] = float(np.max(rip[-k:]))
     return Tm, T, s, msg, Dn, extra
 
 
