@@ -448,6 +448,7 @@ class FluidSolver:
             lim = {"acoustic": pa.cfl * self.h / (pa.c0 + vmax)}
         else:  # a pressure projection: the CFL condition of the flow, no speed of sound
             lim = {"cfl": pa.cfl * self.h / vmax} if vmax > 0 else {}
+            amax = max(amax, float(np.linalg.norm(self.gravity)))  # a ramp starts at g = 0
         if np.isfinite(rho_mu) and not getattr(self.visc_method, "implicit", False):
             lim["viscous"] = pa.visc_cfl * self.h * self.h * rho_mu
         if amax > 0:
