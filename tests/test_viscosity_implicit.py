@@ -203,3 +203,74 @@ def test_stiff_poiseuille_at_the_acoustic_step_matches_the_steady_parabola():
     assert "viscous" not in lim
     assert lim["acoustic"] / (s.params.visc_cfl * h * h / nu) > 1e3
     assert s.step_count <= 32
+
+
+def test_park_fixed_point_solves_the_trapezoidal_system():
+    """The Jacobi fixed point of park-semi-implicit and the CG agree on (I - dt/2 L0) y = r
+    (dt = 10x the explicit viscous step, per-particle mu), and its iteration count grows with
+    dt (the cost the module docstring states)."""
+    from sphfem.fluid import viscosity_semi_implicit_park2019 as park
+
+    s = channel(2, 24, "park-semi-implicit")
+    p, nl = s.p, s.nbrs
+    fl = p.kind == FLUID
+    rng = np.random.default_rng(11)
+    p.mu[fl] = 10.0 ** rng.uniform(-1, 1, fl.sum())
+    a = weiler.prepare(s, weiler.SolveStats("test", 1e-12, 10), 0, "mirror")
+    dt_e = s.params.visc_cfl * s.h**2 * (p.rho[fl] / p.mu[fl]).min()
+    r = np.zeros_like(p.v)
+    r[fl] = prescribed_field(p.x[fl])
+    its = []
+    for gain in (10.0, 40.0):
+        dt = gain * dt_e
+        y = np.zeros_like(p.v)
+        y[fl] = r[fl]
+        it, rel = park.fixed_point(a["coef_view"], a["csum"], p.kind, nl.offsets, nl.indices,
+                                   0.5 * dt, r, y, np.zeros_like(p.v), 1e-13, 100_000)
+        assert rel <= 1e-13
+        its.append(it)
+        x = np.zeros_like(p.v)
+        b = p.m[:, None] * r
+        weiler.pcg(a["coef_view"], a["csum"], p.m, p.kind, nl.offsets, nl.indices, 0.5 * dt, b,
+                   x, 1e-13, 2000, (a["r"], a["z"], a["p"], a["q"]))
+        assert np.abs(y[fl] - x[fl]).max() < 1e-9 * np.abs(x[fl]).max()
+    assert its[1] > 2 * its[0]
+
+
+def test_park_shear_wave_decay_is_trapezoidal_at_100x_the_explicit_step():
+    """Trapezoidal rule: at 100x the explicit step the amplitude is within 1 % of exp(-nu k^2
+    t) (second order in time; backward Euler is 14 % off there) and within 2 % (the spatial
+    error) of the trapezoidal factor ((1 - a/2) / (1 + a/2))^n, a = dt nu k^2."""
+    k = 2 * np.pi
+    dx = 1.0 / 64
+    x = lattice([0.0, 0.0], [8 * dx, 1.0], dx)
+    par = FluidParams(rho0=1.0, c0=0.5, mu=1.0, viscosity="park-semi-implicit", alpha=0.0,
+                      park_tolerance=1e-10, park_max_iter=5000)
+    s = FluidSolver(make_particles(x, None, dx, 1.0), 3 * dx, [0.0, 0.0], [8 * dx, 1.0],
+                    period=[8 * dx, 1.0], params=par)
+    s.p.v[:, 0] = 0.01 * np.sin(k * s.p.x[:, 1])
+    dt = 100 * par.visc_cfl * s.h**2
+    for _ in range(4):
+        s.step(dt)
+        s.check()
+    amp = shear_wave_amplitude(s, k) / 0.01
+    a = dt * k * k
+    assert abs(amp - math.exp(-k * k * s.t)) < 0.01 * math.exp(-k * k * s.t)
+    assert abs(amp - ((1 - a / 2) / (1 + a / 2)) ** 4) < 0.02 * amp
+    assert s.diagnostics()["viscosity_solve"]["not_converged"] == 0
+
+
+@pytest.mark.parametrize("name", ["weiler-implicit", "park-semi-implicit"])
+def test_implicit_models_are_registered_documented_and_drop_the_viscous_limit(name):
+    from pathlib import Path
+
+    from sphfem.fluid import viscosity
+
+    assert viscosity.lookup(name).implicit
+    assert not viscosity.lookup("laminar").implicit
+    doc = (Path(__file__).parents[1] / "docs" / "scenes.md").read_text()
+    assert f'`"{name}"`' in doc
+    for key in viscosity.lookup(name).params:
+        assert f"`{key.name}`" in doc
+    assert "viscous" in channel(2, 8, "laminar").dt_limits()
+    assert "viscous" not in channel(2, 8, name).dt_limits()
