@@ -43,6 +43,7 @@ from __future__ import annotations
 
 import logging
 import math
+from array import array
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -305,14 +306,17 @@ def wall_reaction(x, v, vw, rho, meff, mu, kind, offsets, indices, R, sigma, ker
 @dataclass
 class SolveStats:
     """Per-solve record of an implicit viscosity model: the tolerance, and for every step
-    the iterations and the final relative residual (``history``: (t, iterations,
-    residual)); plus the model's work arrays (sized to the particle count, rebuilt when it
-    changes; no state is carried between evaluations, so cell sorts need nothing)."""
+    its time, iterations and final relative residual (compact arrays ``t``, ``iterations``,
+    ``residual``: 24 bytes a step); plus the model's work arrays (sized to the particle
+    count, rebuilt when it changes; no state is carried between evaluations, so cell sorts
+    need nothing)."""
 
     method: str
     tolerance: float
     max_iter: int
-    history: list = field(default_factory=list)
+    t: array = field(default_factory=lambda: array("d"))
+    iterations: array = field(default_factory=lambda: array("q"))
+    residual: array = field(default_factory=lambda: array("d"))
     not_converged: int = 0
     arrays: dict = field(default_factory=dict, repr=False)
 
@@ -328,7 +332,9 @@ class SolveStats:
         return a
 
     def record(self, t: float, iterations: int, residual: float, converged: bool) -> None:
-        self.history.append((t, iterations, residual))
+        self.t.append(t)
+        self.iterations.append(iterations)
+        self.residual.append(residual)
         if not converged:
             self.not_converged += 1
             logger.warning("%s: not converged in %d iterations at t = %.6g s (relative "
@@ -339,8 +345,7 @@ class SolveStats:
                          self.method, iterations, residual, t)
 
     def to_dict(self) -> dict:
-        its = [h[1] for h in self.history]
-        res = [h[2] for h in self.history]
+        its, res = self.iterations, self.residual
         return {
             "method": self.method, "tolerance": self.tolerance, "max_iter": self.max_iter,
             "solves": len(its),
