@@ -95,6 +95,12 @@ def test_strain_rate_of_a_linear_field_is_exact(dim):
     D = 0.5 * (A + A.T)
     assert ok.all()
     np.testing.assert_allclose(gd, math.sqrt(2.0 * np.sum(D * D)), rtol=1e-10)
+    # wall neighbours carrying the same linear field (walls=True) keep it exact
+    kw = kind.copy()
+    kw[x[:, 0] < 0.3] = WALL
+    strain_rate(x, u, vol, kw, nl.offsets, nl.indices, R, sig, code, period, 1e8, gd, ok, True)
+    np.testing.assert_allclose(gd[kw == FLUID], math.sqrt(2.0 * np.sum(D * D)), rtol=1e-10)
+    assert np.all(gd[kw == WALL] == 0.0)
     # simple shear u = (G y, 0): gamma_dot = |G|
     us = np.zeros_like(x)
     us[:, 0] = -4.0 * x[:, 1]
@@ -104,7 +110,8 @@ def test_strain_rate_of_a_linear_field_is_exact(dim):
 
 def test_strain_rate_falls_back_and_skips_other_kinds():
     """A lone fluid particle (singular moment matrix) falls back to the plain gradient
-    (flagged, gamma_dot 0, finite); wall rows get 0."""
+    (flagged, gamma_dot 0, finite); wall rows get 0; wall neighbours count only with
+    ``walls``."""
     x = np.array([[0.0, 0.0], [0.1, 0.0], [5.0, 5.0]])
     kind = np.array([FLUID, WALL, FLUID], dtype=np.int8)
     u = np.array([[0.0, 0.0], [1.0, 0.0], [2.0, 0.0]])
@@ -113,8 +120,11 @@ def test_strain_rate_falls_back_and_skips_other_kinds():
     code = K.kernel_code("wendland_c2")
     gd, ok = np.full(3, -1.0), np.zeros(3, dtype=np.bool_)
     strain_rate(x, u, np.full(3, 0.01), kind, nl.offsets, nl.indices, R,
-                K.kernel_sigma(code, 2, R), code, period, 1e8, gd, ok)
+                K.kernel_sigma(code, 2, R), code, period, 1e8, gd, ok, False)
     assert np.all(gd == 0.0) and not ok[0] and not ok[2] and ok[1]
+    strain_rate(x, u, np.full(3, 0.01), kind, nl.offsets, nl.indices, R,
+                K.kernel_sigma(code, 2, R), code, period, 1e8, gd, ok, True)
+    assert gd[0] > 0.0 and np.isfinite(gd[0]) and not ok[0] and gd[1] == gd[2] == 0.0
 
 
 def test_registry_scene_keys_and_docs():

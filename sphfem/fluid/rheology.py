@@ -45,7 +45,7 @@ from numba import njit, prange
 from sphfem.fluid.passes import grad_factor
 from sphfem.kernels import FASTMATH
 from sphfem.methods import MethodRegistry
-from sphfem.particles import FLUID
+from sphfem.particles import FLUID, WALL
 from sphfem.schema import Param
 from sphfem.smallmat import invert_sym3, pair_sep
 
@@ -157,9 +157,11 @@ def apparent_viscosity(gd, kind, tau0, k, n, gd0, papanastasiou, mu):
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
 def strain_rate(x, u, V, kind, offsets, indices, R, sigma, kernel_code, period, cond_max,
-                gd, ok):
+                gd, ok, walls=False):
     """gd[i] = sqrt(2 D_i : D_i) of fluid particle i from the renormalised velocity gradient
-    over its fluid neighbours (module docstring); ok[i] False where B_i fell back to I."""
+    over its fluid neighbours and, with ``walls``, its wall neighbours (module docstring);
+    ``u``: the velocities (walls: the wall model's ghost velocity); ok[i] False where B_i
+    fell back to I.  Other rows get 0."""
     n, dim = x.shape
     R2 = R * R
     fac2 = sigma / R2
@@ -176,7 +178,7 @@ def strain_rate(x, u, V, kind, offsets, indices, R, sigma, kernel_code, period, 
         g00 = g01 = g02 = g10 = g11 = g12 = g20 = g21 = g22 = 0.0
         for jj in range(offsets[i], offsets[i + 1]):
             j = indices[jj]
-            if kind[j] != FLUID:
+            if kind[j] != FLUID and not (walls and kind[j] == WALL):
                 continue
             r0, r1, r2 = pair_sep(x, i, j, dim, period, periodic)
             d2 = r0 * r0 + r1 * r1 + r2 * r2
@@ -245,8 +247,8 @@ def update_viscosity(solver) -> int:
     ok = getattr(solver, "_rheology_ok", None)
     if ok is None or ok.shape[0] != p.n:
         ok = solver._rheology_ok = np.ones(p.n, dtype=np.bool_)
-    strain_rate(p.x, p.v, s.V, p.kind, nl.offsets, nl.indices, solver.R, solver.sigma,
-                solver.kernel_code, solver.period, COND_MAX, p.gamma_dot, ok)
+    strain_rate(p.x, s.vg, s.V, p.kind, nl.offsets, nl.indices, solver.R, solver.sigma,
+                solver.kernel_code, solver.period, COND_MAX, p.gamma_dot, ok, True)
     apparent_viscosity(p.gamma_dot, p.kind, float(tau0), float(k), float(n), float(gd0),
                        solver.params.regularisation == "papanastasiou", p.mu)
     return int(p.n - np.count_nonzero(ok))
