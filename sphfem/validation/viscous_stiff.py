@@ -75,7 +75,7 @@ def stiff_poiseuille(n: int, factor: float, viscosity: str = IMPLICIT, steps: in
     dt_v = explicit_viscous_dt(s)
     st = solve_stats(s)
     extra = {"nu_over_water": factor, "steps": s.step_count, "t_over_tnu": t * nu / L**2,
-             "gain": s.dt_limits()["acoustic"] / dt_v,
+             "gain": s.stable_dt()[0] / dt_v,
              "explicit_steps": t / dt_v,
              "iter_mean": st.get("iterations_mean"), "iter_max": st.get("iterations_max"),
              "not_converged": st.get("not_converged")}
@@ -132,7 +132,7 @@ def drop_summary(T, Z, X, s, Rd: float, n_radius: int, g: float = 9.81) -> dict:
             "vmax_end_over_vimpact": float(speed.max()) / (g * t_c),
             "rho_range": [float(p.rho[fl].min() / s.params.rho0),
                           float(p.rho[fl].max() / s.params.rho0)],
-            "steps": s.step_count, "gain": s.dt_limits()["acoustic"] / explicit_viscous_dt(s),
+            "steps": s.step_count, "gain": s.stable_dt()[0] / explicit_viscous_dt(s),
             "iter_mean": st.get("iterations_mean"), "iter_max": st.get("iterations_max"),
             "not_converged": st.get("not_converged")}
 
