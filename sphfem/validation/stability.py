@@ -182,6 +182,16 @@ def droplet_scene(quick: bool, *, speed: float = 50.0, c0: float | None = None,
     return scene
 
 
+def ink_scene(quick: bool) -> dict:
+    """The 50 m/s droplet (fluid + heat) as a Herschel-Bulkley ink: yield stress 1e4 Pa,
+    index n = 0.3, k = 10 Pa s^0.3, cut-off at 1e3 1/s (largest viscosity 10 Pa s, 3e4 x
+    the water's; sphfem.fluid.rheology)."""
+    s = droplet_scene(quick, modules=("fluid", "heat"))
+    s["fluid"].update(rheology="herschel-bulkley", tau0=1.0e4, n=0.3, k=10.0,
+                      gamma_dot_0=1.0e3)
+    return s
+
+
 def tlsph_substrate_scene(quick: bool) -> dict:
     """:func:`droplet_scene` with the TL-SPH substrate backend (0.3 mm wide, 60 um deep
     box of solid particles relaxed quasi-statically every 60 SPH steps); full: 3D at
@@ -437,6 +447,9 @@ ROWS: list[Row] = [
         checks=CLEARY_CHECKS),
     Row("viscosity-1000x", "50 m/s droplet with 1e3 x water's viscosity (0.3 Pa s)",
         lambda q: droplet_scene(q, mu_factor=1e3, modules=("fluid", "heat")), STABLE,
+        checks={**CLEARY_CHECKS, **FLUID_CHECKS}),
+    Row("ink-yield-1e4Pa-n0.3", "50 m/s droplet of a Herschel-Bulkley ink, tau0 = 1e4 Pa, "
+        "n = 0.3 (explicit viscosity up to 10 Pa s)", ink_scene, EITHER, FLUID_GUARD,
         checks={**CLEARY_CHECKS, **FLUID_CHECKS}),
     Row("disordered-20pct", "50 m/s droplet, every particle moved randomly by up to 0.2 dx, "
         "corrected Laplacian", lambda q: droplet_scene(q, jitter=0.2, modules=("fluid", "heat"),
