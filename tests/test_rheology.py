@@ -143,3 +143,85 @@ def test_registry_scene_keys_and_docs():
                                              gamma_dot_0=1.0)) == ()
     p = FluidParams(rheology="herschel-bulkley", tau0=2.0, k=0.5, n=0.5, gamma_dot_0=0.01)
     assert rheology.max_viscosity(p) == pytest.approx(0.5 * 0.01**-0.5 + 2.0 / 0.01)
+
+
+SCENE = """
+[scene]
+name = "ink"
+dim = 2
+[domain]
+lo = [-1.0e-3, -0.4e-3]
+hi = [1.0e-3, 1.2e-3]
+[sph]
+dx = 5.0e-5
+[materials.ink]
+rho0 = 1000.0
+c0 = 20.0
+[materials.floor]
+rho0 = 1000.0
+[[blocks]]
+name = "floor"
+shape = "box"
+kind = "wall"
+material = "floor"
+lo = [-1.0e-3, -0.15e-3]
+hi = [1.0e-3, 0.0]
+[[blocks]]
+name = "drop"
+shape = "sphere"
+kind = "fluid"
+material = "ink"
+center = [0.0, 0.6e-3]
+radius = 0.4e-3
+[physics]
+modules = ["fluid"]
+[fluid]
+{fluid}
+[time]
+t_end = 1.0e-3
+max_steps = 3
+"""
+HB_KEYS = 'rheology = "herschel-bulkley"\ntau0 = 20.0\nk = 0.5\nn = 0.5\ngamma_dot_0 = 2.0'
+
+
+def test_scene_rheology_keys_are_checked(tmp_path):
+    from sphfem.scene import SceneError, load_scene
+
+    def load(fluid):
+        path = tmp_path / "ink.toml"
+        path.write_text(SCENE.format(fluid=fluid))
+        return load_scene(path)
+
+    sc = load(HB_KEYS)  # the material needs no mu with a non-Newtonian rheology
+    assert (sc.fluid.rheology, sc.fluid.tau0, sc.fluid.regularisation) == (
+        "herschel-bulkley", 20.0, "cutoff")
+    with pytest.raises(SceneError, match="gamma_dot_0"):
+        load(HB_KEYS.replace("gamma_dot_0 = 2.0", ""))
+    with pytest.raises(SceneError, match="viscosity"):
+        load(HB_KEYS + '\nviscosity = "none"')
+    with pytest.raises(SceneError, match="does not apply"):  # Bingham takes no n
+        load(HB_KEYS.replace("herschel-bulkley", "bingham"))
+    with pytest.raises(SceneError, match="mu"):  # Newtonian still needs the material's mu
+        load('rheology = "newtonian"')
+
+
+def test_resting_ink_has_the_largest_viscosity_and_its_step(tmp_path):
+    """A drop at rest on a lattice has no strain rate (exactly, to round-off), so every
+    fluid particle takes mu_max = k gd0^(n-1) + tau0/gd0 = 0.5/sqrt(2) + 10 Pa s, and the
+    viscous step limit is visc_cfl h^2 rho/mu_max (h = 1.5 dx)."""
+    from sphfem.scene import load_scene
+    from sphfem.simulation import Simulation
+
+    path = tmp_path / "ink.toml"
+    path.write_text(SCENE.format(fluid=HB_KEYS))
+    sim = Simulation(load_scene(path), source=str(path))
+    summary = sim.run(tmp_path / "out", progress=False)
+    ps = sim.particles
+    fl = ps.kind == FLUID
+    mu_max = 0.5 / math.sqrt(2.0) + 20.0 / 2.0
+    assert summary["steps"] == 3
+    assert np.all(ps.gamma_dot[fl] < 1e-6 * 2.0)
+    np.testing.assert_allclose(ps.mu[fl], mu_max, rtol=1e-12)
+    lim = summary["diagnostics"]["fluid"]["dt_limits_s"]["viscous"]
+    rho_min = float(ps.rho[fl].min())
+    assert lim == pytest.approx(0.125 * (1.5 * 5.0e-5) ** 2 * rho_min / mu_max, rel=1e-12)
