@@ -50,6 +50,7 @@ from skfem import (
 )
 
 from sphfem.fem import forms
+from sphfem.fem.assembly import elasticity_stiffness, stiffness_intorder
 from sphfem.loads import scalar_at, temperature_change
 from sphfem.progress import stage
 from sphfem.quasistatic import QuasiStaticSubstrate
@@ -328,7 +329,8 @@ class FEMSubstrate(QuasiStaticSubstrate):
         self.cg_iterations: list[int] = []
 
         escal = _ELEMENTS[(type(mesh), element)]()
-        self.basis = Basis(mesh, ElementVector(escal, dim=self.dim), intorder=intorder)
+        self.basis = Basis(mesh, ElementVector(escal, dim=self.dim),
+                           intorder=self._basis_intorder(mesh, element, intorder))
         self.sbasis = self.basis.with_element(escal)  # scalar, same order
         self.vbasis = self.basis.with_element(_ELEMENTS[(type(mesh), "P1")]())  # vertices
         self.component_dofs = self.basis.split_indices()
@@ -355,11 +357,8 @@ class FEMSubstrate(QuasiStaticSubstrate):
 
         # --- stiffness, once ------------------------------------------------------
         t1 = time.perf_counter()
-        K = self.stiffness_form(self.lam, self.mu)
-        if nthreads:
-            K = type(K)(K.form, nthreads=nthreads)
         with stage(f"assembling K ({self.basis.N} dofs)"):
-            self.K = K.assemble(self._stiffness_basis()).tocsr()
+            self.K = self._assemble_stiffness(nthreads)
         self.timings["assemble_K"] = time.perf_counter() - t1
         t2 = time.perf_counter()
         what = "factorising" if solver == "direct" else "building the AMG preconditioner of"
@@ -390,6 +389,34 @@ class FEMSubstrate(QuasiStaticSubstrate):
         """Whether rigid motions are left (``pin_rigid`` default): nothing constrains the
         body."""
         return not clamps and not held
+
+    @staticmethod
+    def _basis_intorder(mesh, element: str, intorder: int | None) -> int | None:
+        """Quadrature order of ``basis`` (loads, stresses): as given; by default scikit-fem's
+        rule, except on quadrilateral / hexahedral meshes of parallelepipeds, where Gauss with
+        p + 1 points per direction (:func:`sphfem.fem.assembly.stiffness_intorder`)
+        integrates the stiffness and the loads of polynomial fields of degree <= p per
+        direction exactly (scikit-fem's default 2 * maxdeg takes 64 points per Q1 hexahedron
+        for the same integrals)."""
+        if intorder is not None or isinstance(mesh, (MeshTet1, MeshTri1)):
+            return intorder
+        return stiffness_intorder(mesh, int(element[1]))
+
+    def _assemble_stiffness(self, nthreads: int | None = None) -> sp.csr_matrix:
+        """K: the element-type-aware assembly (:mod:`sphfem.fem.assembly`) of
+        :func:`sphfem.fem.forms.elasticity`; scikit-fem's assembly of ``stiffness_form``
+        when a subclass states another form or ``nthreads`` is given."""
+        if self.stiffness_form is forms.elasticity and not nthreads:
+            io = self.intorder
+            if io is None:
+                io = stiffness_intorder(self.mesh, int(self.element[1]))
+            K = elasticity_stiffness(self.basis, self.lam, self.mu, io)
+            if K is not None:
+                return K
+        form = self.stiffness_form(self.lam, self.mu)
+        if nthreads:
+            form = type(form)(form.form, nthreads=nthreads)
+        return form.assemble(self._stiffness_basis()).tocsr()
 
     def _stiffness_basis(self) -> Basis:
         """The basis K is assembled on: on affine simplices with the default quadrature,
