@@ -291,8 +291,10 @@ def hb_poiseuille_case(quick: bool = False) -> CaseResult:
         "Each run starts from the regularised model's exact profile and stops at steady state "
         "(relative change of the velocities over 0.05 T_v below 1e-4, T_v = rho (H/2)^2 / "
         f"mu_w; the slowest mode decays over ~0.4 T_v, so ~1e-3 of u remains) or at "
-        f"{t_max:g} T_v ('T/Tv', 'last change').  'err L2' is the distance to the "
-        "regularised model's exact profile (discretisation error; the observed order is "
+        f"{t_max:g} T_v ('T/Tv', 'last change').  'err L2' (sqrt(sum_i (u_i - u(y_i))^2 / "
+        "sum_i u(y_i)^2) over the fluid particles; 'err Linf' max |u_i - u(y_i)| / max u) "
+        "is the distance to the regularised model's exact profile (discretisation error; "
+        "the observed order is "
         "its); 'vs HB' the distance to the exact Herschel-Bulkley profile with its plug "
         "(DESIGN.md erratum of Park eq. 2.162), whose regularisation part alone is "
         "'reg vs HB'.",
