@@ -45,6 +45,7 @@ import logging
 import math
 from array import array
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 from numba import njit, prange
@@ -65,16 +66,30 @@ WALLS = {"mirror": 2.0, "wall": 1.0, "ghost": 1.0}
 NAME = "weiler-implicit"
 
 
+class Pairs(NamedTuple):
+    """The velocity system's pair coefficients of one evaluation: fluid row i holds its
+    fluid neighbours ``nb[offsets[i]:offsets[i] + cnt[i]]`` with coefficients ``coef`` (the
+    neighbour list's slots, compacted); ``csum[i]`` = sum_j c_ij over fluid and wall
+    neighbours, ``wv[i]`` = sum_w c_iw vw_w (the walls' known part)."""
+
+    offsets: np.ndarray
+    nb: np.ndarray
+    coef: np.ndarray
+    cnt: np.ndarray
+    csum: np.ndarray
+    wv: np.ndarray
+
+
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
 def pair_coefficients(x, rho, meff, mu, vw, kind, offsets, indices, R, sigma, kernel_code,
-                      period, eps2, form, wall_factor, coef, csum, wv):
-    """The viscous pair coefficients of the fluid rows (in the neighbour list's layout).
+                      period, eps2, form, wall_factor, nb, coef, cnt, csum, wv):
+    """The viscous pair coefficients c_ij of the fluid rows (see :class:`Pairs`).
 
-    coef[jj] = c_ij for fluid row i and its fluid or wall neighbour j = indices[jj] (0 for
-    other pairs and non-fluid rows); csum[i] = sum_j c_ij over fluid and wall neighbours;
-    wv[i] = sum_w c_iw vw_w over wall neighbours (``vw``: the walls' Dirichlet velocity).
-    ``form`` 0: (rho_i + rho_j)^2 / 4, 1: rho_i rho_j; ``meff`` m of fluid, rho_w V_w of
-    walls; ``eps2`` = eps_visc h^2; wall pairs are multiplied by ``wall_factor``.
+    Fluid neighbours j go compacted into ``nb``/``coef`` (``cnt`` per row); wall
+    neighbours w only into csum[i] and wv[i] = sum_w c_iw vw_w (``vw``: the walls'
+    Dirichlet velocity; wall pairs multiplied by ``wall_factor``).  ``form`` 0:
+    (rho_i + rho_j)^2 / 4, 1: rho_i rho_j; ``meff`` m of fluid, rho_w V_w of walls; ``eps2``
+    = eps_visc h^2.  Non-fluid rows get cnt = 0, csum = 0, wv = 0.
     """
     n, dim = x.shape
     R2 = R * R
@@ -87,30 +102,36 @@ def pair_coefficients(x, rho, meff, mu, vw, kind, offsets, indices, R, sigma, ke
         w0 = 0.0
         w1 = 0.0
         w2 = 0.0
-        fluid_row = kind[i] == FLUID
-        for jj in range(offsets[i], offsets[i + 1]):
-            j = indices[jj]
-            kj = kind[j]
-            c = 0.0
-            if fluid_row and (kj == FLUID or kj == WALL):
+        c_n = 0
+        if kind[i] == FLUID:
+            for jj in range(offsets[i], offsets[i + 1]):
+                j = indices[jj]
+                kj = kind[j]
+                if kj != FLUID and kj != WALL:
+                    continue
                 r0, r1, r2 = pair_sep(x, i, j, dim, period, periodic)
                 d2 = r0 * r0 + r1 * r1 + r2 * r2
-                if d2 < R2 and d2 > 0.0:
-                    F = grad_factor(np.sqrt(d2), R, fac2, kernel_code)
-                    mus = mu[i] + mu[j] if kj == FLUID else 2.0 * wall_factor * mu[i]
-                    if form == 0:
-                        rs = rho[i] + rho[j]
-                        c = 4.0 * meff[j] * mus * F * d2 / ((d2 + eps2) * (rs * rs))
-                    else:
-                        c = meff[j] * mus * F * d2 / ((d2 + eps2) * (rho[i] * rho[j]))
-                    s += c
-                    if kj == WALL:
-                        w0 += c * vw[j, 0]
-                        if dim > 1:
-                            w1 += c * vw[j, 1]
-                        if dim > 2:
-                            w2 += c * vw[j, 2]
-            coef[jj] = c
+                if d2 >= R2 or d2 == 0.0:
+                    continue
+                F = grad_factor(np.sqrt(d2), R, fac2, kernel_code)
+                mus = mu[i] + mu[j] if kj == FLUID else 2.0 * wall_factor * mu[i]
+                if form == 0:
+                    rs = rho[i] + rho[j]
+                    c = 4.0 * meff[j] * mus * F * d2 / ((d2 + eps2) * (rs * rs))
+                else:
+                    c = meff[j] * mus * F * d2 / ((d2 + eps2) * (rho[i] * rho[j]))
+                s += c
+                if kj == FLUID:
+                    nb[offsets[i] + c_n] = j
+                    coef[offsets[i] + c_n] = c
+                    c_n += 1
+                else:
+                    w0 += c * vw[j, 0]
+                    if dim > 1:
+                        w1 += c * vw[j, 1]
+                    if dim > 2:
+                        w2 += c * vw[j, 2]
+        cnt[i] = c_n
         csum[i] = s
         wv[i, 0] = w0
         if dim > 1:
@@ -119,42 +140,62 @@ def pair_coefficients(x, rho, meff, mu, vw, kind, offsets, indices, R, sigma, ke
             wv[i, 2] = w2
 
 
+@njit(cache=True, inline="always")
+def _row_sum(nb, coef, start, stop, x, dim):
+    """sum_j c_ij x_j over one compacted row (3 components, zero-padded)."""
+    s0 = 0.0
+    s1 = 0.0
+    s2 = 0.0
+    for jj in range(start, stop):
+        j = nb[jj]
+        c = coef[jj]
+        s0 += c * x[j, 0]
+        if dim > 1:
+            s1 += c * x[j, 1]
+        if dim > 2:
+            s2 += c * x[j, 2]
+    return s0, s1, s2
+
+
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
-def apply_laplacian(coef, csum, wv, kind, offsets, indices, v, out):
-    """out[i] = (L v)_i = sum_j c_ij (v_j - v_i) for fluid rows (wall neighbours at their
-    Dirichlet velocity, through ``wv``); other rows are left alone."""
+def _laplacian(offsets, nb, coef, cnt, csum, wv, kind, v, out):
     n, dim = v.shape
     for i in prange(n):
         if kind[i] != FLUID:
             continue
+        s = _row_sum(nb, coef, offsets[i], offsets[i] + cnt[i], v, dim)
         for k in range(dim):
-            s = wv[i, k] - csum[i] * v[i, k]
-            for jj in range(offsets[i], offsets[i + 1]):
-                j = indices[jj]
-                if kind[j] == FLUID:
-                    s += coef[jj] * v[j, k]
-            out[i, k] = s
+            out[i, k] = wv[i, k] - csum[i] * v[i, k] + s[k]
+
+
+def apply_laplacian(pairs: Pairs, kind, v, out) -> None:
+    """out[i] = (L v)_i = sum_j c_ij (v_j - v_i) for fluid rows (wall neighbours at their
+    Dirichlet velocity, through ``wv``); other rows are left alone."""
+    _laplacian(pairs.offsets, pairs.nb, pairs.coef, pairs.cnt, pairs.csum, pairs.wv, kind, v,
+               out)
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
-def _matvec(coef, csum, m, kind, offsets, indices, dt, x, y):
-    """y = M (I - dt L0) x over fluid rows (L0: L with the wall velocities set to zero);
-    returns x . y."""
+def _matvec_kernel(offsets, nb, coef, cnt, csum, m, kind, dt, x, y):
     n, dim = x.shape
     xy = 0.0
     for i in prange(n):
         if kind[i] != FLUID:
             continue
         d = 1.0 + dt * csum[i]
+        s = _row_sum(nb, coef, offsets[i], offsets[i] + cnt[i], x, dim)
         for k in range(dim):
-            s = 0.0
-            for jj in range(offsets[i], offsets[i + 1]):
-                j = indices[jj]
-                if kind[j] == FLUID:
-                    s += coef[jj] * x[j, k]
-            y[i, k] = m[i] * (d * x[i, k] - dt * s)
-            xy += x[i, k] * y[i, k]
+            yk = m[i] * (d * x[i, k] - dt * s[k])
+            y[i, k] = yk
+            xy += x[i, k] * yk
     return xy
+
+
+def matvec(pairs: Pairs, m, kind, dt: float, x, y) -> float:
+    """y = M (I - dt L0) x over fluid rows (L0: L with the wall velocities set to zero);
+    returns x . y."""
+    return _matvec_kernel(pairs.offsets, pairs.nb, pairs.coef, pairs.cnt, pairs.csum, m, kind,
+                          dt, x, y)
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
@@ -175,18 +216,28 @@ def _precondition(r, dinv, m, kind, z):
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
-def _update(x, r, p, q, alpha, kind):
-    """x += alpha p, r -= alpha q over fluid rows; returns x . x."""
+def _update(x, r, p, q, alpha, dinv, m, kind, z):
+    """x += alpha p, r -= alpha q, z = D^-1 r over fluid rows; returns (r . z, |M^-1 r|^2,
+    x . x)."""
     n, dim = x.shape
+    rz = 0.0
+    rr = 0.0
     xx = 0.0
     for i in prange(n):
         if kind[i] != FLUID:
             continue
         for k in range(dim):
-            x[i, k] += alpha * p[i, k]
-            r[i, k] -= alpha * q[i, k]
-            xx += x[i, k] * x[i, k]
-    return xx
+            xk = x[i, k] + alpha * p[i, k]
+            rk = r[i, k] - alpha * q[i, k]
+            zk = dinv[i] * rk
+            x[i, k] = xk
+            r[i, k] = rk
+            z[i, k] = zk
+            rz += rk * zk
+            rv = rk / m[i]
+            rr += rv * rv
+            xx += xk * xk
+    return rz, rr, xx
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
@@ -219,7 +270,7 @@ def _residual(b, Ax, x, m, kind, r):
     return bb, rr, xx
 
 
-def pcg(coef, csum, m, kind, offsets, indices, dt, b, x, tol, max_iter, work):
+def pcg(pairs: Pairs, m, kind, dt: float, b, x, tol: float, max_iter: int, work):
     """Jacobi-preconditioned CG for M (I - dt L0) x = b (fluid rows of ``x``, warm start on
     entry, the solution on return).  ``work``: four arrays shaped like ``x``.
 
@@ -228,7 +279,7 @@ def pcg(coef, csum, m, kind, offsets, indices, dt, b, x, tol, max_iter, work):
     |b| would not: b holds dt times the body force, which the viscous term cancels).  Returns
     (iterations, |M^-1 r| / |x|); raises FloatingPointError on a non-finite residual."""
     r, z, p, q = work
-    _matvec(coef, csum, m, kind, offsets, indices, dt, x, q)
+    matvec(pairs, m, kind, dt, x, q)
     bb, rr, xx = _residual(b, q, x, m, kind, r)
     if bb == 0.0:
         x[kind == FLUID] = 0.0
@@ -240,16 +291,14 @@ def pcg(coef, csum, m, kind, offsets, indices, dt, b, x, tol, max_iter, work):
 
     if rr <= max(tol * tol * xx, floor):
         return 0, rel(rr, xx)
-    dinv = np.where(kind == FLUID, 1.0 / (m * (1.0 + dt * csum)), 0.0)
+    dinv = np.where(kind == FLUID, 1.0 / (m * (1.0 + dt * pairs.csum)), 0.0)
     rz, rr = _precondition(r, dinv, m, kind, z)
     p[:] = z
     it = 0
     while it < max_iter:
         it += 1
-        pq = _matvec(coef, csum, m, kind, offsets, indices, dt, p, q)
-        alpha = rz / pq
-        xx = _update(x, r, p, q, alpha, kind)
-        rz_new, rr = _precondition(r, dinv, m, kind, z)
+        alpha = rz / matvec(pairs, m, kind, dt, p, q)
+        rz_new, rr, xx = _update(x, r, p, q, alpha, dinv, m, kind, z)
         if not math.isfinite(rr):
             raise FloatingPointError("implicit viscosity: non-finite CG residual")
         if rr <= max(tol * tol * xx, floor):
@@ -329,6 +378,10 @@ class SolveStats:
                                                         "q")})
         if a.get("coef") is None or a["coef"].shape[0] < m_list:
             a["coef"] = np.zeros(m_list + m_list // 4)
+            a["nb"] = np.zeros(m_list + m_list // 4, dtype=np.int64)
+            a["cnt"] = np.zeros(n, dtype=np.int64)
+        if a["cnt"].shape[0] != n:
+            a["cnt"] = np.zeros(n, dtype=np.int64)
         return a
 
     def record(self, t: float, iterations: int, residual: float, converged: bool) -> None:
@@ -370,13 +423,15 @@ def prepare(solver, stats: SolveStats, form: int, walls: str) -> dict:
     a = stats.work(p.n, solver.dim, nl.indices.shape[0])
     vw = s.vg if walls == "ghost" else p.v
     a["wall_factor"] = WALLS[walls]
-    coef = a["coef"][: nl.indices.shape[0]]
+    m_list = nl.indices.shape[0]
+    pairs = Pairs(nl.offsets, a["nb"][:m_list], a["coef"][:m_list], a["cnt"], a["csum"],
+                  a["wv"])
     pair_coefficients(p.x, p.rho, s.meff, p.mu, vw, p.kind, nl.offsets, nl.indices, solver.R,
                       solver.sigma, solver.kernel_code, solver.period,
-                      solver.params.eps_visc * solver.h * solver.h, form, a["wall_factor"], coef,
-                      a["csum"], a["wv"])
+                      solver.params.eps_visc * solver.h * solver.h, form, a["wall_factor"],
+                      pairs.nb, pairs.coef, pairs.cnt, pairs.csum, pairs.wv)
     a["vw"] = vw
-    a["coef_view"] = coef
+    a["pairs"] = pairs
     return a
 
 
@@ -384,8 +439,7 @@ def add_viscous(solver, a: dict, v: np.ndarray, form: int) -> None:
     """acc += L v on the fluid rows, f_fluid += the walls' reaction (wall rows)."""
     p, s, nl = solver.p, solver._scratch, solver.nbrs
     out = a["q"]
-    apply_laplacian(a["coef_view"], a["csum"], a["wv"], p.kind, nl.offsets, nl.indices, v,
-                    out)
+    apply_laplacian(a["pairs"], p.kind, v, out)
     fl = p.kind == FLUID
     p.acc[fl] += out[fl]
     wall_reaction(p.x, v, a["vw"], p.rho, s.meff, p.mu, p.kind, nl.offsets, nl.indices,
@@ -402,7 +456,7 @@ def _accelerate(solver, state):
         return state
     form = FORMS[pa.weiler_form]
     a = prepare(solver, state, form, pa.weiler_walls)
-    p, nl = solver.p, solver.nbrs
+    p = solver.p
     fl = p.kind == FLUID
     v0 = start_velocity(solver)
     rhs = a["v0"]
@@ -411,8 +465,8 @@ def _accelerate(solver, state):
     b[fl] = p.m[fl, None] * (rhs[fl] + dt * a["wv"][fl])
     x = a["x"]
     x[fl] = (2.0 * p.v[fl] - v0[fl]) if solver.pressure_method.eos else rhs[fl]  # warm start
-    it, res = pcg(a["coef_view"], a["csum"], p.m, p.kind, nl.offsets, nl.indices, dt, b, x,
-                  state.tolerance, state.max_iter, (a["r"], a["z"], a["p"], a["q"]))
+    it, res = pcg(a["pairs"], p.m, p.kind, dt, b, x, state.tolerance, state.max_iter,
+                  (a["r"], a["z"], a["p"], a["q"]))
     state.record(solver.t, it, res, res <= state.tolerance)
     add_viscous(solver, a, x, form)
     return state

@@ -48,9 +48,7 @@ NAME = "park-semi-implicit"
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
-def jacobi_sweep(coef, csum, kind, offsets, indices, half_dt, r, x, y):
-    """y_i = (r_i + dt/2 sum_j c_ij x_j) / (1 + dt/2 sum_j c_ij) over fluid rows (fluid
-    neighbours j); returns (|y - x|^2, |y|^2)."""
+def _sweep(offsets, nb, coef, cnt, csum, kind, half_dt, r, x, y):
     n, dim = x.shape
     dd = 0.0
     yy = 0.0
@@ -58,13 +56,9 @@ def jacobi_sweep(coef, csum, kind, offsets, indices, half_dt, r, x, y):
         if kind[i] != FLUID:
             continue
         inv = 1.0 / (1.0 + half_dt * csum[i])
+        s = weiler._row_sum(nb, coef, offsets[i], offsets[i] + cnt[i], x, dim)
         for k in range(dim):
-            s = 0.0
-            for jj in range(offsets[i], offsets[i + 1]):
-                j = indices[jj]
-                if kind[j] == FLUID:
-                    s += coef[jj] * x[j, k]
-            yk = (r[i, k] + half_dt * s) * inv
+            yk = (r[i, k] + half_dt * s[k]) * inv
             d = yk - x[i, k]
             y[i, k] = yk
             dd += d * d
@@ -72,14 +66,22 @@ def jacobi_sweep(coef, csum, kind, offsets, indices, half_dt, r, x, y):
     return dd, yy
 
 
-def fixed_point(coef, csum, kind, offsets, indices, half_dt, r, x, y, tol, max_iter):
+def jacobi_sweep(pairs: weiler.Pairs, kind, half_dt: float, r, x, y):
+    """y_i = (r_i + dt/2 sum_j c_ij x_j) / (1 + dt/2 sum_j c_ij) over fluid rows (fluid
+    neighbours j); returns (|y - x|^2, |y|^2)."""
+    return _sweep(pairs.offsets, pairs.nb, pairs.coef, pairs.cnt, pairs.csum, kind, half_dt,
+                  r, x, y)
+
+
+def fixed_point(pairs: weiler.Pairs, kind, half_dt: float, r, x, y, tol: float,
+                max_iter: int):
     """Jacobi sweeps from ``x`` until |x^{k+1} - x^k| <= tol |x^{k+1}|; the result is in
-    ``x``.  Returns (iterations, last relative change)."""
+    ``x`` (``y``: work array).  Returns (iterations, last relative change)."""
     rel = math.inf
     it = 0
     while it < max_iter:
         it += 1
-        dd, yy = jacobi_sweep(coef, csum, kind, offsets, indices, half_dt, r, x, y)
+        dd, yy = jacobi_sweep(pairs, kind, half_dt, r, x, y)
         x, y = y, x
         if not math.isfinite(dd):
             raise FloatingPointError("semi-implicit viscosity: non-finite iterate")
@@ -99,18 +101,17 @@ def _accelerate(solver, state):
     if dt is None:  # the initial evaluation: no step yet, no viscous velocity change
         return state
     a = weiler.prepare(solver, state, 0, pa.park_walls)
-    p, nl = solver.p, solver.nbrs
+    p = solver.p
     fl = p.kind == FLUID
     v0 = weiler.start_velocity(solver)
     lv0 = a["z"]
-    weiler.apply_laplacian(a["coef_view"], a["csum"], a["wv"], p.kind, nl.offsets, nl.indices,
-                           v0, lv0)
+    weiler.apply_laplacian(a["pairs"], p.kind, v0, lv0)
     r = a["b"]
     r[fl] = v0[fl] + dt * p.acc[fl] + 0.5 * dt * (lv0[fl] + a["wv"][fl])
     x = a["x"]
     x[fl] = (2.0 * p.v[fl] - v0[fl]) if solver.pressure_method.eos else r[fl]
-    it, rel = fixed_point(a["coef_view"], a["csum"], p.kind, nl.offsets, nl.indices, 0.5 * dt,
-                          r, x, a["r"], state.tolerance, state.max_iter)
+    it, rel = fixed_point(a["pairs"], p.kind, 0.5 * dt, r, x, a["r"], state.tolerance,
+                          state.max_iter)
     state.record(solver.t, it, rel, rel <= state.tolerance)
     mean = a["p"]
     mean[fl] = 0.5 * (x[fl] + v0[fl])
