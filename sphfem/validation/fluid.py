@@ -433,15 +433,18 @@ def droplet_c0(dim: int, sigma: float, rho: float, Rd: float, v_max: float,
     return max(10.0 * v_max, math.sqrt(100.0 * p_max / rho))
 
 
-def droplet_pressures(model: str, dim: int, sigma: float, Rd: float, R: float):
+def droplet_pressures(model: str, dim: int, sigma: float, Rd: float, R: float,
+                      rho0: float = 1000.0, dx: float | None = None, fluid: dict | None = None):
     """(start pressure, largest pressure) [Pa] of a drop at rest under ``model``: the
     Laplace pressure, plus for "akinci" the cohesion's internal (virial) pressure, which
     the EOS balances in the bulk (:func:`sphfem.fluid.surface_tension_akinci2013.
-    internal_pressure`, of order sigma / R_kernel)."""
+    akinci_c0_pressure`, of order sigma / R_kernel)."""
     p_L = (dim - 1) * sigma / Rd
     if model == "akinci":
-        from sphfem.fluid.surface_tension_akinci2013 import internal_pressure
-        p = p_L - internal_pressure(sigma, R, dim)
+        from sphfem.fluid import surface_tension_akinci2013 as ak
+        share = ((fluid or {}).get("st_params") or {}).get("akinci_curvature",
+                                                            ak.CURVATURE_DEFAULT)
+        p = ak.akinci_c0_pressure(sigma, rho0, R, dx or R / SUPPORT, dim, Rd, share)
         return p, p
     return p_L, p_L
 
@@ -471,7 +474,7 @@ def run_droplet(dim: int, n_radius: int, model: str = "csf", periods: float = 1.
     xf = droplet_packing(dim, Rd, dx)
     T = rayleigh_period(dim, sigma, rho0, Rd)
     V0 = eps * 2 * math.pi / T * Rd
-    p_start, p_max = droplet_pressures(model, dim, sigma, Rd, SUPPORT * dx)
+    p_start, p_max = droplet_pressures(model, dim, sigma, Rd, SUPPORT * dx, rho0, dx, fluid)
     if c0 is None:
         c0 = droplet_c0(dim, sigma, rho0, Rd, V0, p_max)
     rho = density(p_start, rho0, c0, 7.0)
