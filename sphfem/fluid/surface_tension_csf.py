@@ -56,16 +56,31 @@ linear and angular momentum are conserved only to the discretisation error (on a
 surface int kappa n dA = 0 in the continuum; a symmetric droplet gets zero net force by
 symmetry); the droplet validation reports the centre-of-mass drift and the momentum.
 
-Stability: the CSF drives particle-scale noise on a disordered free surface; with physical
-viscosity only (Ohnesorge ~ 0.004) a 2D droplet with 40 particles across its radius
-develops growing surface ripples after about one period.  A small artificial viscosity
-(``[fluid] alpha`` = 0.02) removes them; particle shifting alone does not.
-
 Time step (Brackbill et al. 1992, capillary wave limit): dt <= 0.25 sqrt(rho h^3/(2 pi
-sigma)), reported as ``capillary`` by :meth:`FluidSolver.dt_limits`.
+sigma)) = 0.25 h / c_cap, reported as ``capillary`` by :meth:`FluidSolver.dt_limits`, with
+
+    c_cap = sqrt(2 pi sigma / (rho h))                   (:func:`capillary_wave_speed`)
+
+the phase speed sqrt(sigma k / rho) of a capillary wave of wavelength h.
+
+Stability: weakly compressible SPH needs c0 >= c_cap (the acoustic step at least as short
+as the capillary one).  The particle-scale capillary waves the CSF carries travel at up to
+~c_cap; with c0 below it they are faster than sound and couple with the (delta-diffused)
+density: surface ripples grow.  Measured on the 2D droplet (R = 1 mm, sigma = 0.072 N/m,
+alpha = 0.02, delta = 0.1, l = 2 mode): c0 from the Laplace rule alone is 2.68 m/s; at
+R/dx = 40 (c_cap = 3.47 m/s) the rms surface ripple (``surface_ripple`` of
+:mod:`sphfem.validation.fluid`) stays < 0.01 dx to 1.2 periods, then grows by ~2.2x per
+0.09 period and stops the run at 1.6 periods; the same with half the time step; with
+c0 = c_cap it stays < 0.011 dx to 2 periods (period 1.018 T_Rayleigh).  delta = 0 or 0.05,
+or particle shifting ("all"), also keep it below 0.015 dx (to 3, 1.8, 1.6 periods), which
+points at the density coupling; at R/dx <= 20 the Laplace rule's c0 already exceeds c_cap.
+:func:`_calibrate` logs a warning when a scene's c0 is below c_cap.
 """
 
 from __future__ import annotations
+
+import logging
+import math
 
 import numpy as np
 from numba import njit, prange
@@ -76,6 +91,8 @@ from sphfem.fluid.surface_tension import SurfaceTensionMethod, register
 from sphfem.kernels import FASTMATH, kernel_f
 from sphfem.particles import FLUID
 from sphfem.smallmat import pair_sep
+
+logger = logging.getLogger(__name__)
 
 #: normal weight omega = smoothstep of |grad C| R from NORMAL_LO to NORMAL_HI (|grad C| R
 #: ~ 1.3 on the outer layer of a droplet, ~ 0.25 on the second, < 0.1 in the bulk)
@@ -243,8 +260,22 @@ def csf_state(state: CSFState | None, n: int, dim: int) -> CSFState:
     return state if state is not None and state.n == n else CSFState(n, dim)
 
 
+def capillary_wave_speed(sigma: float, rho: float, h: float) -> float:
+    """Phase speed [m/s] of a capillary wave of wavelength ``h``, sqrt(2 pi sigma / (rho h)):
+    the least c0 for which the particle-scale capillary waves are subsonic (module doc)."""
+    return math.sqrt(2.0 * math.pi * sigma / (rho * h))
+
+
 def _calibrate(pa, m_bar: float, R: float, dim: int):
-    """CSF uses the material's sigma directly (no calibration constant)."""
+    """CSF uses the material's sigma directly (no calibration constant); warns when c0 is
+    below the capillary wave speed at h = R/2 (surface ripples grow, module doc)."""
+    if pa.sigma > 0:
+        c_cap = capillary_wave_speed(pa.sigma, pa.rho0, 0.5 * R)
+        if pa.c0 < c_cap:
+            logger.warning("surface_tension = 'csf': c0 = %.3g m/s is below the capillary wave "
+                           "speed sqrt(2 pi sigma/(rho0 h)) = %.3g m/s at h = R/2; "
+                           "particle-scale surface ripples can grow: raise c0 to >= %.3g m/s",
+                           pa.c0, c_cap, c_cap)
     return None, pa.sigma
 
 
@@ -262,8 +293,8 @@ METHOD = register(SurfaceTensionMethod(
         "(1992) in a single-phase free-surface SPH form (colour gradient of the kernel sum, "
         "curvature from the valid normals with a tangential-moment correction, see "
         "sphfem.fluid.surface_tension_csf), the material's sigma used directly, checked "
-        "against the Laplace pressure and Rayleigh's droplet period; use it with alpha ~ "
-        "0.02 (damps particle-scale surface noise at fine resolution)",
+        "against the Laplace pressure and Rayleigh's droplet period; needs c0 >= "
+        "sqrt(2 pi sigma/(rho0 h)) (else particle-scale surface ripples grow)",
     params=(),
     constant_key=None,
     calibrate=_calibrate,

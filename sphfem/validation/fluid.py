@@ -424,13 +424,18 @@ def _zero_crossings(t, D):
 
 
 def droplet_c0(dim: int, sigma: float, rho: float, Rd: float, v_max: float,
-               p_max: float | None = None) -> float:
+               p_max: float | None = None, h: float | None = None) -> float:
     """Artificial speed of sound of the droplet runs: the usual WCSPH rules c0 >= 10 |v|max
     and a density variation <= 1 % under the largest pressure of the model, p_max <= 0.01
-    rho c0^2 (default p_max: the Laplace pressure (dim - 1) sigma / Rd)."""
+    rho c0^2 (default p_max: the Laplace pressure (dim - 1) sigma / Rd), and, given the
+    smoothing length ``h``, c0 >= the capillary wave speed sqrt(2 pi sigma/(rho h)) (below
+    it particle-scale surface ripples grow, see :mod:`sphfem.fluid.surface_tension_csf`)."""
+    from sphfem.fluid.surface_tension_csf import capillary_wave_speed
+
     if p_max is None:
         p_max = (dim - 1) * sigma / Rd
-    return max(10.0 * v_max, math.sqrt(100.0 * p_max / rho))
+    c_cap = capillary_wave_speed(sigma, rho, h) if h else 0.0
+    return max(10.0 * v_max, math.sqrt(100.0 * p_max / rho), c_cap)
 
 
 def droplet_pressures(model: str, dim: int, sigma: float, Rd: float, R: float,
@@ -476,7 +481,7 @@ def run_droplet(dim: int, n_radius: int, model: str = "csf", periods: float = 1.
     V0 = eps * 2 * math.pi / T * Rd
     p_start, p_max = droplet_pressures(model, dim, sigma, Rd, SUPPORT * dx, rho0, dx, fluid)
     if c0 is None:
-        c0 = droplet_c0(dim, sigma, rho0, Rd, V0, p_max)
+        c0 = droplet_c0(dim, sigma, rho0, Rd, V0, p_max, 0.5 * SUPPORT * dx)
     rho = density(p_start, rho0, c0, 7.0)
     ps = make_particles(xf, None, dx, rho0, np.full(len(xf), rho))
     vol = math.pi * Rd**2 if dim == 2 else 4.0 / 3.0 * math.pi * Rd**3
