@@ -43,6 +43,8 @@ from sphfem.particles import FLUID
 #: the pressure-model modules, in the order of the ``pressure`` choices (one line each)
 METHOD_MODULES = (
     "sphfem.fluid.pressure_deltasph_antuono2010",
+    "sphfem.fluid.pressure_iisph_ihmsen2014",
+    "sphfem.fluid.pressure_dfsph_bender2017",
 )
 
 

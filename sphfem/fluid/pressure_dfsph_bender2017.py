@@ -1,0 +1,182 @@
+"""Divergence-free SPH of Bender & Koschier (2017) (``pressure = "dfsph"``).
+
+J. Bender, D. Koschier, "Divergence-free SPH for incompressible and viscous fluids", IEEE
+TVCG 23 (2017) 1193, Algorithms 1-3; Park (2019) sec. 2.2.1.3, Alg. 2.2-2.4, with the
+erratum of DESIGN.md (the density solve divides by the factor).  Two solves of the same
+form on the velocities, both by Jacobi iterations at the positions x^n of the step, with
+the pairs, g_ij = grad_i W_ij, rho_i and A_i of :mod:`sphfem.fluid.projection`:
+
+* **divergence solve** (Alg. 2) on v^n = v* - dt a_nonp: until the mean of
+  dt max(D_i, 0) / rho0 is within ``dfsph_divergence_tolerance`` (per cent; at least one
+  iteration), with D_i = sum_j M_j v_ij . g_ij,
+      kappa^v_i = D_i / dt * rho_i / A_i;
+* **density solve** (Alg. 3) on v* = v^n + dt a_nonp: until the mean of max(rho*_i - rho0, 0)
+  / rho0 is within ``dfsph_tolerance`` (per cent; at least two iterations), with the
+  predicted density rho*_i = rho_i + dt D_i,
+      kappa_i = (rho*_i - rho0) / dt^2 * rho_i / A_i,
+  (Bender & Koschier's alpha_i = rho_i / A_i multiplies, i.e. the factor A_i divides);
+* each iteration:  v_i -= dt [sum_F m_j (kappa_i/rho_i + kappa_j/rho_j) g_ij
+                              + sum_W M_b kappa_i/rho_i g_ib],
+  i.e. the pressure acceleration a_i(q) with q = kappa / rho = p / rho^2.
+
+Only compression is corrected (sources clamped at zero, as in the papers' pressure
+clamping): the free surface gets no tension.  Warm start of the density solve (Bender &
+Koschier, sec. 4.3): half the last step's kappa (kept under the particles' ids),
+applied only to particles whose predicted density exceeds rho0 -- the Jacobi increments
+are non-negative, so a full warm start could never be taken back where the fluid has
+left; the divergence solve starts from zero.
+
+Order within the shared step (:func:`sphfem.fluid.pressure.projection_advance`): the
+paper's divergence solve of the end of step n runs at the start of step n+1, at the same
+positions x^n and with the same rho and A as the density solve (computed once), so the
+non-pressure forces of step n+1 see the velocities before it.  ``p`` of a fluid particle
+is rho_i^2 times the step's total q (both solves), the wall particles' ``p`` is
+extrapolated for output, and their ``f_fluid`` gets the exact reaction of the solves'
+wall terms.  Iterations, final density and divergence errors per step are in
+``diagnostics()["pressure_solve"]``.
+"""
+
+from __future__ import annotations
+
+import logging
+
+from numba import njit, prange
+
+from sphfem.fluid import projection
+from sphfem.fluid.pressure import PressureMethod, register
+from sphfem.fluid.projection import (
+    ProjectionState,
+    add_reaction,
+    density_rate,
+    pressure_acceleration,
+)
+from sphfem.particles import FLUID
+from sphfem.schema import Param
+
+logger = logging.getLogger(__name__)
+
+#: least iterations of the divergence and density solves (Bender & Koschier, Alg. 2-3)
+MIN_ITERATIONS_DIVERGENCE = 1
+MIN_ITERATIONS_DENSITY = 2
+#: fraction of the last step's kappa applied as warm start of the density solve
+WARM_FRACTION = 0.5
+#: relaxation of the Jacobi increments (SPlisHSPlasH's DFSPH: 0.5; see the module docstring)
+RELAX = 0.5
+
+
+@njit(cache=True, parallel=True)
+def stiffness(rho, rate, A, kind, rho0, dt, density, Q, dq, beta):
+    """Increment dq_i of q_i = kappa_i / rho_i on fluid rows: the paper's
+    e_i / (dt^2 A_i) with e_i = beta (rho_i - rho0) + dt D_i (``density``; beta:
+    :func:`sphfem.fluid.projection.carried_weight`) or dt D_i (divergence),
+    D_i = ``rate``, clamped so that the step's total Q_i + dq_i stays >= 0; returns the
+    mean of max(e_i, 0) / rho0 over fluid particles (strict maths)."""
+    n = rho.shape[0]
+    s = 0.0
+    nf = 0
+    for i in prange(n):
+        dq[i] = 0.0
+        if kind[i] != FLUID:
+            continue
+        nf += 1
+        e = dt * rate[i] + (beta * (rho[i] - rho0) if density else 0.0)
+        if e > 0.0:
+            s += e
+        if A[i] > 0.0:
+            new = Q[i] + RELAX * e / (dt * dt * A[i])
+            dq[i] = (new if new > 0.0 else 0.0) - Q[i]
+    return s / (rho0 * nf) if nf > 0 else 0.0
+
+
+def jacobi(solver, w, dt: float, density: bool, tol: float, min_it: int, max_it: int,
+           beta: float = 1.0):
+    """Jacobi iterations of one solve on ``solver.p.v`` (fluid rows), accumulating q in
+    ``w.Q`` (density) or ``w.Qv`` (divergence); returns (iterations, final error)."""
+    p, nl, rho0 = solver.p, solver.nbrs, solver.params.rho0
+    pairs = (w.M, p.kind, nl.offsets, w.nbj, w.grad, w.cnt)
+    Q = w.Q if density else w.Qv
+    it = 0
+    while True:
+        density_rate(p.v, *pairs, w.rate)
+        err = stiffness(w.rho, w.rate, w.A, p.kind, rho0, dt, density, Q, w.q, beta)
+        if (err <= tol and it >= min_it) or it >= max_it:
+            return it, err
+        pressure_acceleration(w.q, *pairs, dt, p.v, True)
+        Q += w.q
+        it += 1
+
+
+def warm_start(solver, state: ProjectionState, w, dt: float) -> None:
+    """Apply WARM_FRACTION of the last step's kappa to the particles predicted to be
+    compressed (v* -> v* + dt a(q_warm)); q_warm goes into ``w.Q``."""
+    p, nl, rho0 = solver.p, solver.nbrs, solver.params.rho0
+    pairs = (w.M, p.kind, nl.offsets, w.nbj, w.grad, w.cnt)
+    fl = p.kind == FLUID
+    density_rate(p.v, *pairs, w.rate)
+    kappa = state.warm.get(p.id)
+    on = fl & (w.rho + dt * w.rate > rho0) & (w.rho > 0)
+    w.Q[:] = 0.0
+    w.Q[on] = WARM_FRACTION * kappa[on] / w.rho[on]
+    if on.any():
+        pressure_acceleration(w.Q, *pairs, dt, p.v, True)
+
+
+def _solve(solver, dt: float, state):
+    pa = solver.params
+    st = state if state is not None else ProjectionState(tolerance=pa.dfsph_tolerance)
+    w = projection.prepare(solver, st)
+    p = solver.p
+    fl = p.kind == FLUID
+    p.v[fl] -= dt * p.acc[fl]  # v^n: the divergence solve of the end of step n
+    w.Qv[:] = 0.0
+    itv, errv = jacobi(solver, w, dt, False, 0.01 * pa.dfsph_divergence_tolerance,
+                       MIN_ITERATIONS_DIVERGENCE, pa.dfsph_divergence_max_iterations)
+    p.v[fl] += dt * p.acc[fl]  # v* of step n+1
+    g = solver.body_force(solver.t)
+    projection.add_wall_hydrostatic(solver, w, dt, g)
+    warm_start(solver, st, w, dt)
+    it, err = jacobi(solver, w, dt, True, 0.01 * pa.dfsph_tolerance, MIN_ITERATIONS_DENSITY,
+                     pa.dfsph_max_iterations, projection.carried_weight(st, dt))
+    st.warm.put(p.id[fl], (w.rho * w.Q)[fl])  # kappa of the density solve
+    q = w.Q + w.Qv
+    p.p[fl] = (w.rho * w.rho * q)[fl]
+    projection.finish(solver, st, q, g)
+    log = st.log
+    log.iterations.append(it)
+    log.divergence_iterations.append(itv)
+    log.density_error.append(err)
+    log.divergence_error.append(errv)
+    if it >= pa.dfsph_max_iterations or itv >= pa.dfsph_divergence_max_iterations:
+        log.not_converged += 1
+        logger.warning("dfsph step %d: iteration limit (density %d, error %.3g %%; "
+                       "divergence %d, error %.3g %%)", solver.step_count, it, 100 * err,
+                       itv, 100 * errv)
+    logger.debug("dfsph step %d: %d divergence iterations (%.3g %%), %d density "
+                 "iterations (%.3g %%)", solver.step_count, itv, 100 * errv, it, 100 * err)
+    return st
+
+
+_WHEN = ("pressure", ("dfsph",))
+
+METHOD = register(PressureMethod(
+    name="dfsph",
+    doc="divergence-free SPH (Bender & Koschier 2017): a divergence solve and a "
+        "constant-density solve by Jacobi iterations, kappa_i = (rho*_i - rho0)/dt^2 "
+        "rho_i/A_i, warm-started; time step from the CFL condition (no c0); walls are the "
+        "wall particles with their own volumes",
+    params=(
+        Param("dfsph_tolerance", float, 0.1, unit="%", positive=True, when=_WHEN,
+              doc="density solve: largest mean density error max(rho* - rho0, 0)/rho0 "
+                  "over the fluid particles, in per cent"),
+        Param("dfsph_divergence_tolerance", float, 0.1, unit="%", positive=True,
+              when=_WHEN,
+              doc="divergence solve: largest mean dt max(Drho/Dt, 0)/rho0, in per cent"),
+        Param("dfsph_max_iterations", int, 100, ge=1, when=_WHEN,
+              doc="iteration limit of the density solve (reaching it is logged and counted "
+                  "in steps_not_converged)"),
+        Param("dfsph_divergence_max_iterations", int, 100, ge=1, when=_WHEN,
+              doc="iteration limit of the divergence solve"),
+    ),
+    solve=_solve,
+    finish=add_reaction,
+))
