@@ -117,12 +117,15 @@ def variant(tau0_over_tw: float, n: float, gd0_ratio: float, reg: str = "cutoff"
             "regularisation": reg}
 
 
-def run_hb_channel(n_across: int, rheo: dict, t_end_over_tv: float = 3.0,
-                   tol: float = 1e-4, start: str = "rest"):
-    """Channel run with ``n_across`` particles across H; stops at steady state: when the
-    relative L2 change of the (sorted) fluid velocities over a chunk of 0.05 T_v (T_v = rho
-    (H/2)^2 / mu_w, mu_w the exact wall viscosity) is below ``tol``, or at
-    ``t_end_over_tv`` T_v.  ``start``: "rest" or "exact" (the regularised exact profile).
+def run_hb_channel(n_across: int, rheo: dict, t_end_over_tv: float = 4.0,
+                   tol: float = 2e-4, start: str = "rest"):
+    """Channel run with ``n_across`` particles across H; stops at steady state or at
+    ``t_end_over_tv`` T_v (T_v = rho (H/2)^2 / mu_w, mu_w the exact wall viscosity).  Steady:
+    the relative L2 change of the (sorted) fluid velocities over the last 0.5 T_v is below
+    ``tol`` (the slowest mode decays as ~exp(-t/T_v) or faster, so about 1.6 ``tol`` of u
+    remains to go; chunk-to-chunk changes are not used: layers sliding past each other
+    in the periodic channel leave a non-decaying ~1e-4 jitter).  ``start``: "rest" or
+    "exact" (the regularised exact profile).
     Returns (y, u, gamma_dot, mu of the fluid particles, solver, info)."""
     tau0, k, n, gd0 = rheo["tau0"], rheo["k"], rheo["n"], rheo["gamma_dot_0"]
     pap = rheo["regularisation"] == "papanastasiou"
@@ -146,18 +149,18 @@ def run_hb_channel(n_across: int, rheo: dict, t_end_over_tv: float = 3.0,
     mu_w = (G * H / 2) / GD_WALL
     tv = RHO0 * (0.5 * H) ** 2 / mu_w
     chunk = 0.05 * tv
-    u_old = np.sort(s.p.v[s.p.kind == ParticleKind.FLUID, 0])  # order-free (cell sorts)
+    hist = [np.sort(s.p.v[s.p.kind == ParticleKind.FLUID, 0])]  # order-free (cell sorts)
     change = math.inf
     while s.t < t_end_over_tv * tv * (1 - 1e-12):
         s.run(s.t + chunk)
-        fl = s.p.kind == ParticleKind.FLUID
-        u = np.sort(s.p.v[fl, 0])
-        change = float(np.linalg.norm(u - u_old) / max(np.linalg.norm(u), 1e-300))
-        u_old = u
-        if change < tol:
-            break
+        hist.append(np.sort(s.p.v[s.p.kind == ParticleKind.FLUID, 0]))
+        if len(hist) > 10:
+            u, u_old = hist[-1], hist[-11]
+            change = float(np.linalg.norm(u - u_old) / max(np.linalg.norm(u), 1e-300))
+            if change < tol:
+                break
     fl = s.p.kind == ParticleKind.FLUID
-    info = {"t_over_tv": s.t / tv, "last_change": change, "steps": s.step_count,
+    info = {"t_over_tv": s.t / tv, "change": change, "steps": s.step_count,
             "mu_max_over_mu_w": max_viscosity(par) / mu_w, "u_exact_max": u_ex}
     return (s.p.x[fl, 1].copy(), s.p.v[fl, 0].copy(), s.p.gamma_dot[fl].copy(),
             s.p.mu[fl].copy(), s, info)
@@ -230,7 +233,7 @@ VARIANTS = {
 GD0_RATIO = 30.0
 #: (variants, resolutions, largest run time in T_v) of the quick and the full case
 QUICK = (("bingham",), (10, 14, 20), 3.0)
-FULL = (tuple(VARIANTS), (10, 20, 40), 8.0)
+FULL = (tuple(VARIANTS), (10, 20, 40), 4.0)
 
 
 def _order(e_coarse, e_fine, n_coarse, n_fine):
@@ -264,7 +267,7 @@ def hb_poiseuille_case(quick: bool = False) -> CaseResult:
             errs.append(e2)
             runs.append(Run(name, dx / H, int(s.p.n), e2, einf, tm.s, {
                 "steps": info["steps"], "t_over_tv": info["t_over_tv"],
-                "last_change": info["last_change"],
+                "change": info["change"],
                 "err_hb_l2": relative_errors(u, u_hb)[0],
                 "reg_vs_hb_l2": relative_errors(u_reg, u_hb)[0],
                 "plug_width_err_over_dx": (w - 2 * y0) / dx,
@@ -289,9 +292,10 @@ def hb_poiseuille_case(quick: bool = False) -> CaseResult:
         "(Shao & Lo form, explicit, arithmetic mean of mu_i and mu_j); channel 8 dx long, "
         "periodic; 3 Adami wall layers.",
         "Each run starts from the regularised model's exact profile and stops at steady state "
-        "(relative change of the velocities over 0.05 T_v below 1e-4, T_v = rho (H/2)^2 / "
-        f"mu_w; the slowest mode decays over ~0.4 T_v, so ~1e-3 of u remains) or at "
-        f"{t_max:g} T_v ('T/Tv', 'last change').  'err L2' (sqrt(sum_i (u_i - u(y_i))^2 / "
+        "(T_v = rho (H/2)^2 / mu_w; the relative L2 change of the velocities over the last "
+        "0.5 T_v ('change/0.5Tv') below 2e-4: the slowest mode decays as exp(-t/T_v) or "
+        f"faster, so < 5e-4 of u remains) or at {t_max:g} T_v ('T/Tv').  'err L2' "
+        "(sqrt(sum_i (u_i - u(y_i))^2 / "
         "sum_i u(y_i)^2) over the fluid particles; 'err Linf' max |u_i - u(y_i)| / max u) "
         "is the distance to the regularised model's exact profile (discretisation error; "
         "the observed order is "
@@ -309,7 +313,8 @@ def hb_poiseuille_case(quick: bool = False) -> CaseResult:
     ]
     return CaseResult("hb-poiseuille", runs, criteria, notes, resolution_label="dx/H",
                       extra_columns={"steps": "steps", "t_over_tv": "T/Tv",
-                                     "last_change": "last change", "err_hb_l2": "vs HB",
+                                     "change": "change/0.5Tv",
+                                     "err_hb_l2": "vs HB",
                                      "reg_vs_hb_l2": "reg vs HB",
                                      "plug_width_err_over_dx": "plug err/dx",
                                      "plug_width_sph_err_over_dx": "sph plug err/dx"})
