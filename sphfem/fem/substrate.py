@@ -5,9 +5,10 @@
 >>> res = sub.solve(dT_nodal=dT, point_forces=(x_sensors, F_sensors))
 >>> res.u, res.stress_nodes, res.von_mises_nodes, res.probe(points)
 
-``K`` is assembled once in the constructor and the condensed matrix ``K_II`` (free dofs)
-is factorised once (``solver="direct"``: CHOLMOD through cholespy when installed,
-otherwise SuperLU in symmetric mode) or given an algebraic
+``K`` is assembled once in the constructor (:mod:`sphfem.fem.assembly`) and the condensed
+matrix ``K_II`` (free dofs) is factorised once (``solver="direct"``, :mod:`sphfem.fem.direct`:
+MKL PARDISO when pypardiso is installed, otherwise SuperLU in symmetric mode on a METIS
+nested-dissection ordering) or given an algebraic
 multigrid hierarchy once (``solver="cg-amg"``: pyamg smoothed aggregation with the rigid
 body modes as near-nullspace, conjugate gradients warm-started from the previous step).
 Every :meth:`FEMSubstrate.solve` re-assembles only the load vector and back-substitutes.
@@ -28,7 +29,6 @@ from pathlib import Path
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.sparse.linalg import splu
 from skfem import (
     Basis,
     ElementHex1,
@@ -51,6 +51,7 @@ from skfem import (
 
 from sphfem.fem import forms
 from sphfem.fem.assembly import elasticity_stiffness, stiffness_intorder
+from sphfem.fem.direct import factorize
 from sphfem.loads import scalar_at, temperature_change
 from sphfem.progress import stage
 from sphfem.quasistatic import QuasiStaticSubstrate
@@ -281,8 +282,8 @@ class FEMSubstrate(QuasiStaticSubstrate):
     solver : "direct" (sparse Cholesky/LU, factorised once) or "cg-amg" (pyamg
         smoothed-aggregation preconditioner built once, CG warm-started from the previous
         solution).
-    direct_backend : "auto" (cholespy's CHOLMOD when installed, else SuperLU), "cholespy"
-        or "splu".
+    direct_backend : "auto" (PARDISO when pypardiso is installed, else SuperLU), "pardiso",
+        "splu" or "cholespy" (:mod:`sphfem.fem.direct`).
     pin_rigid : hold rigid motions by a 3-2-1 pin set; default: only when nothing else
         constrains the body.
     rtol, maxiter : CG stopping criterion (relative residual) and iteration cap.
@@ -460,33 +461,10 @@ class FEMSubstrate(QuasiStaticSubstrate):
     def _factorize(self) -> None:
         A = self.K[self.I][:, self.I]
         if self.solver == "direct":
-            backend = self.direct_backend
-            if backend == "auto":
-                backend = "cholespy" if _has_cholespy() else "splu"
-            if backend == "cholespy":
-                import cholespy
-
-                Ac = A.tocsr()
-                chol = cholespy.CholeskySolverD(
-                    Ac.shape[0], Ac.indptr.astype(np.int32), Ac.indices.astype(np.int32),
-                    np.ascontiguousarray(Ac.data, dtype=np.float64), cholespy.MatrixType.CSR)
-
-                def backsolve(b):
-                    x = np.zeros_like(b)
-                    chol.solve(np.ascontiguousarray(b), x)
-                    return x
-
-                self._backsolve = backsolve
-            elif backend == "splu":
-                # K_II is symmetric positive definite: a symmetric ordering without pivoting
-                # (SuperLU's symmetric mode) fills in less than the default COLAMD.
-                lu = splu(A.tocsc(), permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                          options={"SymmetricMode": True})
-                self._backsolve = lu.solve
-            else:
-                raise ValueError(f"direct_backend must be 'auto', 'cholespy' or 'splu', "
-                                 f"got {backend!r}")
-            self.backend = backend
+            groups = self.I // self.dim  # the scalar dof (node) of each vector unknown
+            self.factor = factorize(A, self.direct_backend, groups=groups)
+            self._backsolve = self.factor.solve
+            self.backend = self.factor.backend
         else:
             self.backend = "pyamg-sa"
             pyamg = _import_pyamg()
@@ -800,14 +778,6 @@ def _closest_on_simplex(x, V):
             if d < bd:
                 best, bd = q, d
     return best
-
-
-def _has_cholespy() -> bool:
-    try:
-        import cholespy  # noqa: F401
-    except ImportError:
-        return False
-    return True
 
 
 def _import_pyamg():
