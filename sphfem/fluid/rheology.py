@@ -251,7 +251,8 @@ def update_viscosity(solver) -> int:
                 solver.kernel_code, solver.period, COND_MAX, p.gamma_dot, ok, True)
     apparent_viscosity(p.gamma_dot, p.kind, float(tau0), float(k), float(n), float(gd0),
                        solver.params.regularisation == "papanastasiou", p.mu)
-    return int(p.n - np.count_nonzero(ok))
+    solver.rheology_fallbacks = int(p.n - np.count_nonzero(ok))  # of the last evaluation
+    return solver.rheology_fallbacks
 
 
 def max_viscosity(params) -> float | None:
