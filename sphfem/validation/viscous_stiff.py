@@ -145,7 +145,16 @@ def explicit_step_estimate(mu: float, n_radius: int, Rd: float = 1e-3, t_end: fl
     return t_end / (visc_cfl * h * h * rho0 / mu)
 
 
-@register("viscous-stiff")
+def _warm_up() -> None:
+    """Compile what the timed runs use: both implicit models and the explicit path, in the
+    channel and the drop set-ups, at a few steps each."""
+    for visc in (IMPLICIT, SEMI):
+        stiff_poiseuille(6, 1e3, visc, steps=2)
+    for visc in (IMPLICIT, SEMI, "laminar"):
+        run_drop(visc, 1.0, 3, t_end=2e-4, samples=2)
+
+
+@register("viscous-stiff", warmup=_warm_up)
 def viscous_stiff_case(quick: bool = False) -> CaseResult:
     """Implicit viscosity at 1e3-1e6 x water's: Poiseuille at the acoustic step against the
     parabola, a falling viscous drop against free fall and the explicit run (or its clean
