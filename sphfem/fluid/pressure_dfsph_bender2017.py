@@ -49,6 +49,7 @@ from sphfem.fluid.projection import (
     add_reaction,
     density_rate,
     pressure_acceleration,
+    wall_extrapolate,
 )
 from sphfem.particles import FLUID
 from sphfem.schema import Param
@@ -101,6 +102,7 @@ def jacobi(solver, w, dt: float, density: bool, tol: float, min_it: int, max_it:
         err = stiffness(w.rho, w.rate, w.A, p.kind, rho0, dt, density, Q, w.q, beta)
         if (err <= tol and it >= min_it) or it >= max_it:
             return it, err
+        wall_extrapolate(w.q, p.kind, nl.offsets, w.nbj, w.wgt, w.cnt)
         pressure_acceleration(w.q, *pairs, dt, p.v, True)
         Q += w.q
         it += 1
@@ -118,6 +120,7 @@ def warm_start(solver, state: ProjectionState, w, dt: float) -> None:
     w.Q[:] = 0.0
     w.Q[on] = WARM_FRACTION * kappa[on] / w.rho[on]
     if on.any():
+        wall_extrapolate(w.Q, p.kind, nl.offsets, w.nbj, w.wgt, w.cnt)
         pressure_acceleration(w.Q, *pairs, dt, p.v, True)
 
 

@@ -38,6 +38,7 @@ from sphfem.fluid.projection import (
     add_reaction,
     density_rate,
     pressure_acceleration,
+    wall_extrapolate,
 )
 from sphfem.particles import FLUID
 from sphfem.schema import Param
@@ -105,6 +106,7 @@ def _solve(solver, dt: float, state):
     while True:
         w.q[:] = 0.0
         w.q[fl] = P[fl] / (w.rho[fl] * w.rho[fl])
+        wall_extrapolate(w.q, p.kind, nl.offsets, w.nbj, w.wgt, w.cnt)
         pressure_acceleration(w.q, *pairs, 1.0, w.acc_p, False)
         density_rate(w.acc_p, *pairs, w.rate)
         err = predicted_error(rho_adv, w.rate, p.kind, rho0, dt, w.aux)
