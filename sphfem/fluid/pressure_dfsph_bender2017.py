@@ -14,17 +14,25 @@ the pairs, g_ij = grad_i W_ij, rho_i and A_i of :mod:`sphfem.fluid.projection`:
   / rho0 is within ``dfsph_tolerance`` (per cent; at least two iterations), with the
   predicted density rho*_i = rho_i + dt D_i,
       kappa_i = (rho*_i - rho0) / dt^2 * rho_i / A_i,
-  (Bender & Koschier's alpha_i = rho_i / A_i multiplies, i.e. the factor A_i divides);
-* each iteration:  v_i -= dt [sum_F m_j (kappa_i/rho_i + kappa_j/rho_j) g_ij
-                              + sum_W M_b kappa_i/rho_i g_ib],
-  i.e. the pressure acceleration a_i(q) with q = kappa / rho = p / rho^2.
+  (Bender & Koschier's alpha_i = rho_i / A_i multiplies, i.e. the factor A_i divides;
+  DESIGN.md's erratum of the thesis' Alg. 2.4);
+* each iteration, with q = kappa / rho = p / rho^2 and the pressure acceleration a_i(q) of
+  :mod:`sphfem.fluid.projection` (the walls' q_b extrapolated from the fluid):
+      v_i += dt a_i(dq),   dq_i = omega e_i / (dt^2 A_i),   e_i the source above,
+  where the step's total Q_i + dq_i is clamped at zero (Ihmsen's clamping of the pressure:
+  the free surface gets no tension, and an overshoot is taken back); the errors count
+  only compression, max(e_i, 0).
 
-Only compression is corrected (sources clamped at zero, as in the papers' pressure
-clamping): the free surface gets no tension.  Warm start of the density solve (Bender &
-Koschier, sec. 4.3): half the last step's kappa (kept under the particles' ids),
-applied only to particles whose predicted density exceeds rho0 -- the Jacobi increments
-are non-negative, so a full warm start could never be taken back where the fluid has
-left; the divergence solve starts from zero.
+Two departures from the paper, both measured: (1) relaxation omega = 0.5 (as in
+SPlisHSPlasH's DFSPH; capped by :func:`sphfem.fluid.projection.relaxation`, 0.27 in 3D):
+the paper's unrelaxed increments diverged on the R = 3 dx Wendland stencil (2D column at
+rest, blow-up within 5 steps), and with increments clamped at zero instead of the total, an
+overshoot could never be taken back (a column at rest sagged at 0.6 m/s); (2) warm start of
+the density solve with half the last step's kappa (kept under the particles' ids; the
+full kappa kept the solver's checkerboard errors: max speed 0.7 m/s in the same column),
+only where the predicted density exceeds rho0; the divergence solve starts from zero.  A
+shortened step carries only (dt / dt_prev)^2 of the density error
+(:func:`sphfem.fluid.projection.carried_weight`).
 
 Order within the shared step (:func:`sphfem.fluid.pressure.projection_advance`): the
 paper's divergence solve of the end of step n runs at the start of step n+1, at the same
@@ -66,7 +74,7 @@ RELAX = 0.5
 
 
 @njit(cache=True, parallel=True)
-def stiffness(rho, rate, A, kind, rho0, dt, density, Q, dq, beta):
+def stiffness(rho, rate, A, kind, rho0, dt, density, Q, dq, beta, relax):
     """Increment dq_i of q_i = kappa_i / rho_i on fluid rows: the paper's
     e_i / (dt^2 A_i) with e_i = beta (rho_i - rho0) + dt D_i (``density``; beta:
     :func:`sphfem.fluid.projection.carried_weight`) or dt D_i (divergence),
@@ -84,13 +92,13 @@ def stiffness(rho, rate, A, kind, rho0, dt, density, Q, dq, beta):
         if e > 0.0:
             s += e
         if A[i] > 0.0:
-            new = Q[i] + RELAX * e / (dt * dt * A[i])
+            new = Q[i] + relax * e / (dt * dt * A[i])
             dq[i] = (new if new > 0.0 else 0.0) - Q[i]
     return s / (rho0 * nf) if nf > 0 else 0.0
 
 
 def jacobi(solver, w, dt: float, density: bool, tol: float, min_it: int, max_it: int,
-           beta: float = 1.0):
+           relax: float, beta: float = 1.0):
     """Jacobi iterations of one solve on ``solver.p.v`` (fluid rows), accumulating q in
     ``w.Q`` (density) or ``w.Qv`` (divergence); returns (iterations, final error)."""
     p, nl, rho0 = solver.p, solver.nbrs, solver.params.rho0
@@ -99,7 +107,7 @@ def jacobi(solver, w, dt: float, density: bool, tol: float, min_it: int, max_it:
     it = 0
     while True:
         density_rate(p.v, *pairs, w.rate)
-        err = stiffness(w.rho, w.rate, w.A, p.kind, rho0, dt, density, Q, w.q, beta)
+        err = stiffness(w.rho, w.rate, w.A, p.kind, rho0, dt, density, Q, w.q, beta, relax)
         if (err <= tol and it >= min_it) or it >= max_it:
             return it, err
         wall_extrapolate(w.q, p.kind, nl.offsets, w.nbj, w.wgt, w.cnt)
@@ -132,14 +140,15 @@ def _solve(solver, dt: float, state):
     fl = p.kind == FLUID
     p.v[fl] -= dt * p.acc[fl]  # v^n: the divergence solve of the end of step n
     w.Qv[:] = 0.0
+    relax = projection.relaxation(st, RELAX)
     itv, errv = jacobi(solver, w, dt, False, 0.01 * pa.dfsph_divergence_tolerance,
-                       MIN_ITERATIONS_DIVERGENCE, pa.dfsph_divergence_max_iterations)
+                       MIN_ITERATIONS_DIVERGENCE, pa.dfsph_divergence_max_iterations, relax)
     p.v[fl] += dt * p.acc[fl]  # v* of step n+1
     g = solver.body_force(solver.t)
     projection.add_wall_hydrostatic(solver, w, dt, g)
     warm_start(solver, st, w, dt)
     it, err = jacobi(solver, w, dt, True, 0.01 * pa.dfsph_tolerance, MIN_ITERATIONS_DENSITY,
-                     pa.dfsph_max_iterations, projection.carried_weight(st, dt))
+                     pa.dfsph_max_iterations, relax, projection.carried_weight(st, dt))
     st.warm.put(p.id[fl], (w.rho * w.Q)[fl])  # kappa of the density solve
     q = w.Q + w.Qv
     p.p[fl] = (w.rho * w.rho * q)[fl]

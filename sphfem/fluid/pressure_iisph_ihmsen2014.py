@@ -15,14 +15,17 @@ mirroring p_i), solved by relaxed Jacobi iterations with the pressure clamped at
     p_i <- max(0, p_i + omega (rho0 - rho^adv_i - (A p)_i) / a_ii),
     a_ii = -dt^2 A_i / rho_i^2                                          (eq. 12 of the paper)
 
-with omega = ``iisph_omega`` (0.5 in the paper), warm start p^0 = p(t - dt) / 2, until the
-mean predicted density error max(rho^adv_i + (A p)_i - rho0, 0) / rho0 over the fluid
-particles is within ``iisph_tolerance`` (per cent; at least two iterations).  Then
-v^{n+1} = v* + dt a_i(p).  The A p product is two gathers: a_i(p) over the pairs, then
-its density rate.  Wall particles: their own volumes (see :mod:`sphfem.fluid.projection`);
-their ``p`` is extrapolated for output and their ``f_fluid`` gets the exact reaction of the
-wall terms.  Iterations and the final density error per step are in
-``diagnostics()["pressure_solve"]``.
+with omega = ``iisph_omega`` (0.5 in the paper; capped by
+:func:`sphfem.fluid.projection.relaxation` where it would diverge: 0.27 in 3D), warm
+start p^0 = p(t - dt) / 2, until the mean predicted density error
+max(rho^adv_i + (A p)_i - rho0, 0) / rho0 over the fluid particles is within
+``iisph_tolerance`` (per cent; at least two iterations).  Then v^{n+1} = v* + dt a_i(p).
+The A p product is two gathers: a_i(p) over the pairs, then its density rate.  A shortened
+step carries only (dt / dt_prev)^2 of the last density error
+(:func:`sphfem.fluid.projection.carried_weight`).  Wall particles: their own volumes and
+the pressure extrapolated from the fluid (see :mod:`sphfem.fluid.projection`); their
+``f_fluid`` gets the exact reaction of the wall terms.  Iterations and the final density
+error per step are in ``diagnostics()["pressure_solve"]``.
 """
 
 from __future__ import annotations
@@ -102,6 +105,7 @@ def _solve(solver, dt: float, state):
     P[:] = 0.0
     P[fl] = WARM_FRACTION * p.p[fl].clip(min=0.0)
     tol = 0.01 * pa.iisph_tolerance
+    omega = projection.relaxation(st, pa.iisph_omega)
     it = 0
     while True:
         w.q[:] = 0.0
@@ -112,7 +116,7 @@ def _solve(solver, dt: float, state):
         err = predicted_error(rho_adv, w.rate, p.kind, rho0, dt, w.aux)
         if (err <= tol and it >= MIN_ITERATIONS) or it >= pa.iisph_max_iterations:
             break
-        relaxed_jacobi(P, w.aux, w.rho, w.A, p.kind, rho0, dt, pa.iisph_omega)
+        relaxed_jacobi(P, w.aux, w.rho, w.A, p.kind, rho0, dt, omega)
         it += 1
     p.v[fl] += dt * w.acc_p[fl]
     p.p[fl] = P[fl]
