@@ -83,6 +83,9 @@ def bench_one(name, h_fine, h_coarse, solver, repeats=3) -> dict:
     }
     if its:
         res["cg_iterations"] = its
+    if getattr(sub, "factor", None) is not None:
+        res.update(ordering=sub.factor.ordering, nnz_K_II=sub.factor.nnz,
+                   nnz_factor=sub.factor.nnz_factor)
     return res
 
 
