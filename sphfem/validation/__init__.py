@@ -31,7 +31,8 @@ _CASE_MODULES = ("sphfem.validation.operators", "sphfem.validation.heat",
                  "sphfem.validation.fluid", "sphfem.validation.fem",
                  "sphfem.validation.solid", "sphfem.validation.fem_axisymmetric",
                  "sphfem.validation.droplet_impact", "sphfem.validation.viscous_stiff",
-                 "sphfem.validation.hb_poiseuille")
+                 "sphfem.validation.hb_poiseuille",
+                 "sphfem.validation.dambreak_incompressible")
 #: entry-point group of installed packages that register validation cases of their own
 #: (``coupling`` registers ``shear-transfer`` from ``coupling.validation``)
 CASE_ENTRY_POINT_GROUP = "sphfem.validation"
