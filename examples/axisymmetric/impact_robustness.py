@@ -19,6 +19,7 @@ Measured cases and what they show: examples/axisymmetric/robustness_results.md.
 from __future__ import annotations
 
 import argparse
+import ast
 import json
 import math
 import sys
@@ -109,13 +110,18 @@ def main():
     ap.add_argument("--mu", type=float, default=1e-3)
     ap.add_argument("--tc", type=float, default=4.0)
     ap.add_argument("--fixed-h", action="store_true")
+    ap.add_argument("--h-mode", choices=("area", "mean-area"), default="area",
+                    help="adaptive h from the ring's own area or the local mean area")
     ap.add_argument("--no-penetration-off", action="store_true")
     ap.add_argument("--fragment-incompressible", action="store_true")
+    ap.add_argument("--kw", action="append", default=[], metavar="KEY=VALUE",
+                    help="more AxisymmetricFluid keywords (Python literals), repeatable")
     ap.add_argument("--out")
     a = ap.parse_args()
-    res = run(a.n, a.v, a.c0 or 10 * a.v, a.mu, a.tc, adaptive_h=not a.fixed_h,
+    extra = {k: ast.literal_eval(x) for k, x in (s.split("=", 1) for s in a.kw)}
+    res = run(a.n, a.v, a.c0 or 10 * a.v, a.mu, a.tc, adaptive_h=False if a.fixed_h else a.h_mode,
               no_penetration=not a.no_penetration_off,
-              fragment_incompressible=a.fragment_incompressible)
+              fragment_incompressible=a.fragment_incompressible, **extra)
     print(json.dumps({k: x for k, x in res.items() if k not in ("history", "columns")}))
     if a.out:
         with open(a.out, "w") as fh:

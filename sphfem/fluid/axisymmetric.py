@@ -122,10 +122,10 @@ def _isfluid(k):
 
 @njit(cache=True, parallel=True)
 def wall_state(x, v, rho, p, A, kind, offsets, indices, Rp, kcode, Lz, gravity, rho0, B,
-               gamma, vg):
+               gamma, vg, p_min=-np.inf):
     """Adami wall pressure, density and ghost velocity of the real WALL rows (planar kernel
     in the meridian plane, support (R_i + R_j) / 2; walls at rest, no prescribed
-    acceleration)."""
+    acceleration); the pressure not below ``p_min`` (0: the wall pushes, never pulls)."""
     for i in prange(x.shape[0]):
         if kind[i] != WALL:
             continue
@@ -151,7 +151,7 @@ def wall_state(x, v, rho, p, A, kind, offsets, indices, Rp, kcode, Lz, gravity, 
             sv0 += v[j, 0] * w
             sv1 += v[j, 1] * w
         if sw > 0.0:
-            pw = (sp + sh) / sw
+            pw = max((sp + sh) / sw, p_min)
             p[i] = pw
             rho[i] = max(tait_density(pw, rho0, B, gamma), 0.5 * rho0)
             vg[i, 0] = 2.0 * v[i, 0] - sv0 / sw
@@ -161,6 +161,89 @@ def wall_state(x, v, rho, p, A, kind, offsets, indices, Rp, kcode, Lz, gravity, 
             rho[i] = rho0
             vg[i, 0] = v[i, 0]
             vg[i, 1] = v[i, 1]
+
+
+@njit(cache=True, parallel=True)
+def mean_area(x, A, kind, offsets, indices, Rp, kcode, Lz, out):
+    """Number-weighted mean meridian area of the fluid around each real FLUID row,
+    out_i = sum_j A_j W_ij / sum_j W_ij over the fluid and its mirrors, self included
+    (pair support (R_i + R_j) / 2).  Both sums lose the same share of the support at a free
+    surface, so their ratio, the local spacing squared, does not (unlike A_i / Shepard)."""
+    for i in prange(x.shape[0]):
+        if kind[i] != FLUID:
+            out[i] = A[i]
+            continue
+        w0 = kernels.kernel_f(0.0, kcode) / (Rp[i] * Rp[i])
+        sw = w0
+        sa = w0 * A[i]
+        for jj in range(offsets[i], offsets[i + 1]):
+            j = indices[jj]
+            if not _isfluid(kind[j]):
+                continue
+            r0 = x[j, 0] - x[i, 0]
+            r1 = min_image(x[j, 1] - x[i, 1], Lz)
+            d2 = r0 * r0 + r1 * r1
+            R = 0.5 * (Rp[i] + Rp[j])
+            if d2 >= R * R:
+                continue
+            w = kernels.kernel_f(math.sqrt(d2) / R, kcode) / (R * R)
+            sw += w
+            sa += w * A[j]
+        out[i] = sa / sw
+
+
+@njit(cache=True, parallel=True)
+def concentration_gradient(x, A, kind, offsets, indices, Rp, s2, kcode, Lz, lam_free,
+                           lam_interior, gc, nrm, near):
+    """grad C_i = sum_j A_j grad_i W_ij over every neighbour (fluid, walls, mirrors), the
+    outward normal n_i = -B_i grad C_i / |B_i grad C_i| (B_i the inverse moment matrix;
+    the plain direction where it is singular) and the class of each real FLUID row from
+    the smallest eigenvalue lambda_i of its moment matrix (Marrone et al. 2010):
+    ``near[i]`` = 1 below ``lam_interior`` (at or next to the free surface: shifted only
+    along the surface), 2 at or below ``lam_free`` (a fragment: not shifted), 0 inside."""
+    for i in prange(x.shape[0]):
+        gc[i, 0] = 0.0
+        gc[i, 1] = 0.0
+        nrm[i, 0] = 0.0
+        nrm[i, 1] = 0.0
+        near[i] = 0
+        if kind[i] != FLUID:
+            continue
+        m00 = 0.0
+        m01 = 0.0
+        m11 = 0.0
+        g0 = 0.0
+        g1 = 0.0
+        for jj in range(offsets[i], offsets[i + 1]):
+            j = indices[jj]
+            r0 = x[j, 0] - x[i, 0]
+            r1 = min_image(x[j, 1] - x[i, 1], Lz)
+            d2 = r0 * r0 + r1 * r1
+            R = 0.5 * (Rp[i] + Rp[j])
+            if d2 >= R * R or d2 == 0.0:
+                continue
+            d = math.sqrt(d2)
+            s = A[j] * (-s2 / (R * R * R) * kernels.kernel_dfdq(d / R, kcode) / d)
+            m00 += s * r0 * r0
+            m01 += s * r0 * r1
+            m11 += s * r1 * r1
+            g0 += s * r0
+            g1 += s * r1
+        gc[i, 0] = g0
+        gc[i, 1] = g1
+        lam = 0.5 * (m00 + m11 - math.sqrt((m00 - m11) ** 2 + 4.0 * m01 * m01))
+        near[i] = 2 if lam <= lam_free else (1 if lam < lam_interior else 0)
+        det = m00 * m11 - m01 * m01
+        if det > 1e-12 * (m00 * m11 + 1e-300):
+            b0 = (m11 * g0 - m01 * g1) / det
+            b1 = (m00 * g1 - m01 * g0) / det
+        else:
+            b0 = g0
+            b1 = g1
+        nb = math.sqrt(b0 * b0 + b1 * b1)
+        if nb > 0.0:
+            nrm[i, 0] = -b0 / nb
+            nrm[i, 1] = -b1 / nb
 
 
 @njit(cache=True, parallel=True)
@@ -405,7 +488,8 @@ class AxisymmetricFluid:
                  wall_z: float | None = None, adaptive_h: bool = False, wall_normals=None,
                  smooth_hoop: bool = True, surface_tension: float = 0.0,
                  no_penetration: bool = False, renorm_lambda_min: float = 0.2,
-                 fragment_incompressible: bool = False):
+                 fragment_incompressible: bool = False, shifting: float = 0.0,
+                 wall_tension: bool = True):
         self.x = np.array(x, dtype=np.float64)
         n = self.n = self.x.shape[0]
         self.v = np.array(v, dtype=np.float64).reshape(n, 2)
@@ -440,12 +524,27 @@ class AxisymmetricFluid:
         self.t = 0.0
         self.step_count = 0
         self.wall_s = {"neighbors": 0.0, "forces": 0.0}
-        self.adaptive_h = bool(adaptive_h)
+        if adaptive_h not in (False, True, "area", "mean-area"):
+            raise ValueError(f"adaptive_h must be False, True, 'area' or 'mean-area', got "
+                             f"{adaptive_h!r}")
+        #: None (fixed R), "area" (R_i from A_i) or "mean-area" (from the local mean area)
+        self.h_mode = {False: None, True: "area"}.get(adaptive_h, adaptive_h) \
+            if not isinstance(adaptive_h, str) else adaptive_h
+        self.adaptive_h = self.h_mode is not None
+        self._abar = None
         self.smooth_hoop = bool(smooth_hoop)
         #: renormalisation only where the moment matrix' smallest eigenvalue reaches this
         self.renorm_lambda_min = float(renorm_lambda_min)
         #: Drho/Dt = 0 (plus the delta term) on fragments (lambda_min < renorm_lambda_min)
         self.fragment_incompressible = bool(fragment_incompressible)
+        if not shifting >= 0.0:
+            raise ValueError(f"shifting must be >= 0 (the coefficient A), got {shifting!r}")
+        #: False: the walls' extrapolated pressure is clipped at 0 (no suction)
+        self.wall_tension = bool(wall_tension)
+        #: particle shifting coefficient A of dr = -A h |v| dt grad C (0: off)
+        self.shifting = float(shifting)
+        #: largest shift of the last step / h, and shifted steps
+        self.last_shift = 0.0
         self.csf = (AxisymmetricCSF(surface_tension, self.kcode, hoop=not self.planar)
                     if surface_tension > 0.0 else None)
         self.wall_normals = None if wall_normals is None else np.asarray(
@@ -475,6 +574,8 @@ class AxisymmetricFluid:
         Hernquist & Katz 1989, eq. 2.21, which keeps the pair forces antisymmetric)."""
         if not self.adaptive_h:
             return np.full(A.shape[0], self.R)
+        if self.h_mode == "mean-area" and self._abar is not None:
+            A = np.where(self.fluid, self._abar, A)
         return np.clip(self.R * np.sqrt(A / self.a_ref), 0.5 * self.R, 2.0 * self.R)
 
     # -- one force evaluation ------------------------------------------------------------
@@ -551,12 +652,17 @@ class AxisymmetricFluid:
         _fill_mirrors(n, src, mtype, zw, self.gravity[1], x, v, vg, rho, p, A, mt, mu, gr, dvdr,
                       Rp)
         wall_state(x, v, rho, p, A, kind, nl.offsets, nl.indices, Rp, self.kcode, self.Lz,
-                   self.gravity, pa.rho0, self.B, pa.gamma, vg)
+                   self.gravity, pa.rho0, self.B, pa.gamma, vg,
+                   -np.inf if self.wall_tension else 0.0)
         mt[:n] = rho[:n] * A[:n]
         _fill_mirrors(n, src, mtype, zw, self.gravity[1], x, v, vg, rho, p, A, mt, mu, gr, dvdr,
                       Rp)
         gradients(x, rho, vg, A, kind, nl.offsets, nl.indices, Rp, self.s2, self.kcode,
                   self.Lz, pa.cond_max, self.renorm_lambda_min, gr, dvdr, shep, Bm, qs)
+        if self.h_mode == "mean-area":  # R_i of the next evaluation
+            abar = np.empty(m)
+            mean_area(x, A, kind, nl.offsets, nl.indices, Rp, self.kcode, self.Lz, abar)
+            self._abar = abar[:n]
         qh = qs if self.smooth_hoop else v[:, 0] / np.where(x[:, 0] != 0.0, x[:, 0], 1.0)
         if self.planar:  # the plain planar divergence of FluidSolver
             Bm[:, :3] = (1.0, 0.0, 1.0)
@@ -579,7 +685,7 @@ class AxisymmetricFluid:
         #: the augmented state of this evaluation (real rows, then mirrors), for callers that
         #: need pair sums of it (the wall forces of sphfem.axisymmetric_scene)
         self.augmented = dict(x=x, v=v, vg=vg, rho=rho, p=p, A=A, mt=mt, mu=mu, kind=kind,
-                              Rp=Rp, nbrs=nl, src=src, mtype=mtype)
+                              Rp=Rp, nbrs=nl, src=src, mtype=mtype, grad_rho=gr)
         #: sum_j A_j W_ij over all neighbours, self included (1 where the areas tile the
         #: plane; ~1/2 at a free surface)
         self.shepard = shep[:n].copy()
@@ -640,12 +746,44 @@ class AxisymmetricFluid:
         self.v[fl] = v_n + dt * self.acc[fl]
         self.rho[fl] = rho_n + dt * self.drho[fl]
         self.x[fl] += 0.5 * dt * self.v[fl]
+        if self.shifting > 0.0:
+            self._shift(dt)
         self._reflect()
         self.t += dt
         self.step_count += 1
         if not np.isfinite(self.x[fl]).all() or not np.isfinite(self.rho[fl]).all():
             raise FloatingPointError(f"axisymmetric fluid: non-finite state at step "
                                      f"{self.step_count}, t = {self.t:.4g} s")
+
+    def _shift(self, dt: float) -> None:
+        """Particle shifting (Skillen et al. 2013, Lind et al. 2012, with the free-surface
+        treatment of Sun et al. 2017; as ``[fluid] shifting = "all"`` of
+        :mod:`sphfem.fluid.surface`): dr_i = -A h_i |v_i| dt grad C_i, grad C_i = sum_j A_j
+        grad_i W_ij over the fluid, the walls and the axis mirrors of this step's evaluation
+        (a ring is not pushed across the axis), projected on the surface's tangent where
+        the moment matrix' lambda_i < 0.75, none on fragments (lambda_i <= 0.2), capped at
+        0.1 h_i; the density follows, rho_i += <grad rho>_i . dr_i; the ring keeps its mass
+        (its meridian area follows from r_i).  It moves the rings towards an even planar
+        cover sum_j A_j W_ij = 1 (the areas, not the spacing, are evened out)."""
+        from sphfem.fluid.surface import shift
+
+        a = self.augmented
+        m = a["x"].shape[0]
+        gc = np.zeros((m, 2))
+        nrm = np.zeros((m, 2))
+        near = np.zeros(m, np.int8)
+        nl = a["nbrs"]
+        concentration_gradient(a["x"], a["A"], a["kind"], nl.offsets, nl.indices, a["Rp"],
+                               self.s2, self.kcode, self.Lz, self.renorm_lambda_min, 0.75,
+                               gc, nrm, near)
+        n = self.n
+        h = 0.5 * a["Rp"][:n]
+        gc = gc[:n] * (h / h.max())[:, None]  # coefficient A h_max below: per-particle h_i
+        kind = np.where(near[:n] == 2, WALL, self.kind).astype(np.int8)  # fragments: none
+        out = np.zeros(n)
+        shift(self.x, self.v, self.rho, kind, gc, nrm[:n], near[:n] == 1, a["grad_rho"][:n],
+              self.shifting * float(h.max()), dt, 0.1 * float(h.min()), True, out)
+        self.last_shift = float(out.max() / h.min())
 
     def _reflect(self) -> None:
         """Reflect the fluid at the axis and the wall plane, wrap periodic z, and hold it
