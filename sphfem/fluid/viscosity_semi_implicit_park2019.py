@@ -15,7 +15,8 @@ taken at the new iterate (a Jacobi sweep):
     v_i^{k+1} = (r_i + dt/2 sum_j c_ij v_j^k) / (1 + dt/2 sum_j c_ij),
     r = v^n + dt a_other + dt/2 L v^n  (+ the walls' known part),
 
-stopped when |v^{k+1} - v^k| <= ``park_tolerance`` |v^{k+1}| (2-norms over the fluid).
+stopped when the residual of the iterate is below ``park_tolerance`` |v^{k+1}| (2-norms
+over the fluid; :func:`fixed_point`).
 Two deviations from the thesis, both stated: (1) the thesis' plain Picard map
 v^{k+1} = r + dt/2 L v^k contracts only for dt/2 rho(L) < 1, i.e. at the explicit step, so
 the diagonal is taken implicitly (the matrix I - dt/2 L is diagonally dominant, so the
@@ -55,11 +56,11 @@ def _sweep(offsets, nb, coef, cnt, csum, kind, half_dt, r, x, y):
     for i in prange(n):
         if kind[i] != FLUID:
             continue
-        inv = 1.0 / (1.0 + half_dt * csum[i])
+        diag = 1.0 + half_dt * csum[i]
         s = weiler._row_sum(nb, coef, offsets[i], offsets[i] + cnt[i], x, dim)
         for k in range(dim):
-            yk = (r[i, k] + half_dt * s[k]) * inv
-            d = yk - x[i, k]
+            yk = (r[i, k] + half_dt * s[k]) / diag
+            d = diag * (yk - x[i, k])  # the residual r - (I - dt/2 L0) x of the iterate x
             y[i, k] = yk
             dd += d * d
             yy += yk * yk
@@ -68,15 +69,19 @@ def _sweep(offsets, nb, coef, cnt, csum, kind, half_dt, r, x, y):
 
 def jacobi_sweep(pairs: weiler.Pairs, kind, half_dt: float, r, x, y):
     """y_i = (r_i + dt/2 sum_j c_ij x_j) / (1 + dt/2 sum_j c_ij) over fluid rows (fluid
-    neighbours j); returns (|y - x|^2, |y|^2)."""
+    neighbours j); returns (|D (y - x)|^2, |y|^2), D (y - x) = r - (I - dt/2 L0) x being the
+    residual of x."""
     return _sweep(pairs.offsets, pairs.nb, pairs.coef, pairs.cnt, pairs.csum, kind, half_dt,
                   r, x, y)
 
 
 def fixed_point(pairs: weiler.Pairs, kind, half_dt: float, r, x, y, tol: float,
                 max_iter: int):
-    """Jacobi sweeps from ``x`` until |x^{k+1} - x^k| <= tol |x^{k+1}|; the result is in
-    ``x`` (``y``: work array).  Returns (iterations, last relative change)."""
+    """Jacobi sweeps from ``x`` until the residual of the last iterate is at most tol times
+    the new one, |r - (I - dt/2 L0) x^k| <= tol |x^{k+1}| (which bounds the relative error:
+    (I - dt/2 L0)^-1 is a contraction; the change |x^{k+1} - x^k| alone does not, its ratio
+    to the error being ~ 1 / (1 - rate) with a rate close to 1 at large steps); the result
+    is in ``x`` (``y``: work array).  Returns (iterations, last relative residual)."""
     rel = math.inf
     it = 0
     while it < max_iter:
@@ -127,7 +132,8 @@ METHOD = register(ViscosityMethod(
         "with dt / (explicit viscous step)",
     params=(
         Param("park_tolerance", float, 1e-6, positive=True, when=("viscosity", (NAME,)),
-              doc="fixed-point stop: |v^{k+1} - v^k| <= tolerance |v^{k+1}|"),
+              doc="fixed-point stop: residual |r - (I - dt/2 L) v^k| <= tolerance |v^{k+1}| "
+                  "(about the relative velocity error)"),
         Param("park_max_iter", int, 2000, positive=True, when=("viscosity", (NAME,)),
               doc="iteration limit per step (beyond: counted and logged as not converged)"),
         Param("park_walls", str, "mirror", choices=tuple(weiler.WALLS),
