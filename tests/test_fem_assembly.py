@@ -114,3 +114,41 @@ def test_hex_substrate_solution_equals_the_default_rule_solution():
     u[I] = spsolve(A.tocsc(), rhs)
     assert np.abs(u).max() > 0
     assert np.abs(res.dofs - u).max() < 1e-9 * np.abs(u).max()
+
+
+@pytest.mark.parametrize("mesh, element", [
+    (MeshTet1.init_tensor(*[np.linspace(0, 1e-3, 4)] * 3).with_defaults(), "P1"),
+    (MeshHex1.init_tensor(*[np.linspace(0, 1e-3, 3)] * 3).with_defaults(), "P2"),
+    (MeshTri1.init_tensor(np.linspace(0, 1e-3, 6), np.linspace(0, 1e-3, 4)).with_defaults(),
+     "P2"),
+], ids=["tet-P1", "hex-P2", "tri-P2"])
+def test_step_operators_equal_scikit_fem(mesh, element):
+    """The per-step sums from cached quadrature tables (thermal load, displacement gradient,
+    temperature at the quadrature points, stress projection) against scikit-fem's forms."""
+    from skfem import LinearForm
+
+    sub = FEMSubstrate(mesh, 300e9, 0.21, 7e-6, element=element, clamps=["bottom"])
+    p = mesh.p
+    dT = 40.0 + 30.0 * np.sin(3e3 * p[0]) * np.cos(2e3 * p[1])
+    dTq = sub.vbasis.interpolate(dT)
+    assert np.abs(sub._dT_qp(dT) - dTq).max() < RTOL * np.abs(dTq).max()
+    f0 = forms.thermal_load(LAM, MU, 7e-6).assemble(sub.basis, dT=dTq)
+    assert np.abs(sub.thermal_load(dT) - f0).max() < RTOL * np.abs(f0).max()
+    f0 = forms.thermal_load(LAM, MU, 7e-6).assemble(sub.basis, dT=2.5)
+    assert np.abs(sub.thermal_load(2.5) - f0).max() < RTOL * np.abs(f0).max()
+    res = sub.solve(dT_nodal=dT)
+    g0 = sub.basis.interpolate(res.dofs).grad
+    assert np.abs(sub.grad_qp(res.dofs) - g0).max() < RTOL * np.abs(g0).max()
+    # projection: M x = int s phi dx, M and the right-hand side by scikit-fem
+    S = res.stress_qp
+    M = forms.mass.assemble(sub.vbasis).tocsc()
+    Sn = res.stress_nodes
+    for i, j in ((0, 0), (0, 1), (1, 2) if sub.dim == 3 else (1, 1), (2, 2)):
+
+        @LinearForm
+        def rhs(v, w, i=i, j=j):
+            return w.s * v
+
+        x = spsolve(M, rhs.assemble(sub.vbasis, s=S[i, j]))
+        assert np.abs(Sn[:, i, j] - x).max() < 1e-11 * np.abs(S).max()
+        assert np.array_equal(Sn[:, i, j], Sn[:, j, i])

@@ -152,8 +152,9 @@ def _splu(A: sp.csr_matrix, groups) -> DirectFactor:
         ordering = "metis nested dissection (nodes)"
 
         def solve(b):
-            x = np.empty(n)
-            x[perm] = lu.solve(np.asarray(b, dtype=np.float64)[perm])
+            b = np.asarray(b, dtype=np.float64)
+            x = np.empty_like(b)
+            x[perm] = lu.solve(b[perm])
             return x
 
     tf = time.perf_counter() - t

@@ -41,7 +41,6 @@ from skfem import (
     ElementTriP2,
     ElementVector,
     FacetBasis,
-    LinearForm,
     Mesh,
     MeshHex1,
     MeshQuad1,
@@ -196,7 +195,7 @@ class FEMResult:
         """Cauchy stress (3, 3, nelems, nqp) at the quadrature points."""
         if "stress_qp" not in self.__dict__:
             s = self.substrate
-            grad = s.basis.interpolate(self.dofs).grad
+            grad = s.grad_qp(self.dofs)
             self.__dict__["stress_qp"] = forms.thermo_elastic_stress(
                 s.lam, s.mu, s.alpha, grad, s._dT_qp(self.dT_spec))
         return self.__dict__["stress_qp"]
@@ -368,6 +367,7 @@ class FEMSubstrate(QuasiStaticSubstrate):
         self.timings["factorize"] = time.perf_counter() - t2
         self._u_prev = None
         self._mass = None
+        self._tables = None
         logger.info("%s: %s %s, %d dofs (%d free), %s; assembly %.2f s, "
                     "factorisation %.2f s", type(self).__name__, type(mesh).__name__, element,
                     self.basis.N, len(self.I), solver, self.timings["assemble_K"],
@@ -490,9 +490,9 @@ class FEMSubstrate(QuasiStaticSubstrate):
         if a.ndim == 0:
             return float(a)
         if a.shape == (self.mesh.nvertices,):
-            return np.asarray(self.vbasis.interpolate(a))
+            return self._interpolate_qp(self.vbasis, a)
         if a.shape == (self.sbasis.N,):
-            return np.asarray(self.sbasis.interpolate(a))
+            return self._interpolate_qp(self.sbasis, a)
         raise ValueError(f"dT: expected a scalar, a callable, or an array of length "
                          f"{self.mesh.nvertices} (vertices) or {self.sbasis.N} (scalar "
                          f"{self.element} dofs); got shape {a.shape}")
@@ -515,9 +515,45 @@ class FEMSubstrate(QuasiStaticSubstrate):
         return out
 
     def thermal_load(self, dT) -> np.ndarray:
-        """Load vector of the thermal strain for the temperature change ``dT``."""
-        return self.thermal_form(self.lam, self.mu, self.alpha).assemble(
-            self.basis, dT=self._dT_qp(dT))
+        """Load vector of the thermal strain for the temperature change ``dT``:
+        f_(a, c) = int (3 lam + 2 mu) alpha dT d phi_a / d x_c dx (forms.thermal_load), summed
+        from the cached basis gradients; a subclass's own ``thermal_form`` is assembled by
+        scikit-fem."""
+        dTq = self._dT_qp(dT)
+        if self.thermal_form is not forms.thermal_load:
+            return self.thermal_form(self.lam, self.mu, self.alpha).assemble(self.basis, dT=dTq)
+        G, dx, edofs = self._qp_tables()
+        w = np.broadcast_to(np.asarray(dTq, float), dx.shape) * dx
+        vals = np.einsum("akeq,eq->ake", G, w)  # (nloc, dim, nelems)
+        beta = forms.thermal_modulus(self.lam, self.mu) * self.alpha
+        return beta * np.bincount(edofs.ravel(), vals.ravel(), minlength=self.basis.N)
+
+    # ------------------------------------------------------------------ quadrature tables
+    def _qp_tables(self):
+        """(G, dx, edofs), cached: the scalar basis gradients G (nloc, dim, nelems, nqp) at the
+        quadrature points of ``basis``, the weights dx (nelems, nqp) and the vector dofs
+        edofs (nloc, dim, nelems) (scikit-fem's ElementVector: local function dim a + c is
+        scalar function a in component c)."""
+        if self._tables is None:
+            sb = self.sbasis
+            G = np.stack([np.asarray(sb.basis[a][0].grad) for a in range(sb.Nbfun)])
+            edofs = self.basis.element_dofs.reshape(sb.Nbfun, self.dim, -1)
+            self._tables = (G, np.asarray(self.basis.dx), edofs)
+        return self._tables
+
+    def grad_qp(self, dofs: np.ndarray) -> np.ndarray:
+        """Displacement gradient (dim, dim, nelems, nqp) at the quadrature points of
+        ``basis``: grad u[c, k] = sum_a u_(a, c) d phi_a / d x_k."""
+        G, _, edofs = self._qp_tables()
+        return np.einsum("ace,akeq->ckeq", np.asarray(dofs)[edofs], G)
+
+    @staticmethod
+    def _interpolate_qp(basis: Basis, a: np.ndarray) -> np.ndarray:
+        """A scalar dof array of ``basis`` at its quadrature points (nelems, nqp)."""
+        out = np.zeros(basis.dx.shape)
+        for k in range(basis.Nbfun):
+            out += a[basis.element_dofs[k]][:, None] * np.asarray(basis.basis[k][0])
+        return out
 
     def facet_basis(self, group: str) -> FacetBasis:
         if group not in self._facet_bases:
@@ -666,26 +702,22 @@ class FEMSubstrate(QuasiStaticSubstrate):
     # ------------------------------------------------------------------ projection
     def project_tensor(self, Sq: np.ndarray) -> np.ndarray:
         """L2 projection of a (3, 3, nelems, nqp) quadrature field onto P1 vertex values,
-        (nvertices, 3, 3); conjugate gradients on the (well conditioned) mass matrix."""
-        from scipy.sparse.linalg import cg
-
+        (nvertices, 3, 3): M x = int s phi_j dx for the 6 components at once, with the P1 mass
+        matrix M factorised once (:func:`sphfem.fem.direct.factorize`)."""
         vb = self.vbasis
         if self._mass is None:
-            self._mass = forms.mass.assemble(vb).tocsr()
-            self._mass_diag = self._mass.diagonal()
-
-        @LinearForm
-        def rhs(v, w):
-            return w.s * v
-
-        out = np.zeros((vb.N, 3, 3))
-        Minv = sp.diags(1.0 / self._mass_diag)
-        for i in range(3):
-            for j in range(i, 3):
-                b = rhs.assemble(vb, s=Sq[i, j])
-                x0 = b / self._mass_diag
-                x, _ = cg(self._mass, b, x0=x0, rtol=1e-12, atol=0.0, M=Minv, maxiter=500)
-                out[:, i, j] = out[:, j, i] = x
+            self._mass = factorize(forms.mass.assemble(vb).tocsr(), "splu")
+            self._mass_weights = np.stack([np.asarray(vb.basis[k][0]) * vb.dx
+                                           for k in range(vb.Nbfun)])  # (nloc, nel, nqp)
+        iu = np.triu_indices(3)
+        comps = np.asarray(Sq)[iu]  # (6, nelems, nqp)
+        vals = np.einsum("keq,ceq->kec", self._mass_weights, comps)  # (nloc, nel, 6)
+        rows = np.repeat(vb.element_dofs[:, :, None], 6, axis=2) * 6 + np.arange(6)
+        rhs = np.bincount(rows.ravel(), vals.ravel(), minlength=6 * vb.N).reshape(vb.N, 6)
+        x = self._mass.solve(rhs)
+        out = np.empty((vb.N, 3, 3))
+        out[:, iu[0], iu[1]] = x
+        out[:, iu[1], iu[0]] = x
         return out
 
 
