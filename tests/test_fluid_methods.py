@@ -55,7 +55,8 @@ def test_each_registry_gives_its_key_choices_defaults_and_docs(key):
 def test_the_default_methods_are_the_ones_before_the_registries():
     defaults = {k: FLUID.param(k).default for k in REGISTRIES}
     assert defaults == {"pressure": "wcsph", "viscosity": "laminar", "surface_tension": "none",
-                        "walls": "adami2012", "integrator": "symplectic"}
+                        "walls": "adami2012", "integrator": "symplectic",
+                        "rheology": "newtonian"}
 
 
 def test_fluid_params_are_derived_from_the_declaration():
