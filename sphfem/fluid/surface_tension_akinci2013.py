@@ -18,8 +18,9 @@ Calibration.  The paper's curvature force gamma m_i (n_i - n_j) is not dimension
 consistent with its cohesion gamma m_i m_j C (their ratio depends on the unit system), so
 the two get separate constants, each fixed by the mechanical tension of a flat interface,
 sigma = int (P_N - P_T) dz with the pair virial (Kirkwood-Buff), evaluated as lattice sums
-at the run's R / dx (:func:`lattice_tensions`; the continuum half-space integral AKINCI_C is
-their limit, ~10 % below the sum at R = 3 dx).  The curvature forces are normal to a flat
+at the run's R / dx on a hexagonal (2D) / cubic (3D) lattice (:func:`lattice_sums`; the
+continuum half-space integral AKINCI_C is their limit, 6 % (2D) / 14 % (3D) below the
+cohesion's sum at R = 3 dx).  The curvature forces are normal to a flat
 interface; they count through the EOS pressure that balances them (the surface layer is
 stretched: positive tension).  ``akinci_curvature`` = phi is the share of sigma carried by
 the curvature term: gamma for (1 - phi) sigma, gamma_k [m/s^2] for phi sigma
@@ -35,17 +36,29 @@ held by it is an elastic solid with a shear modulus of the order of its internal
 ~sigma / R, far above the capillary stress sigma / R_drop.  Measured on the 2D droplet of
 ``sphfem validate droplet-oscillation`` (R_drop = 10 dx, started from rest in the model's
 equilibrium): the l = 2 period is 0.39-0.45 of Rayleigh's with phi = 0-0.25 and the drop
-keeps a plastic deformation; with phi = 0.9 it is 0.94, with phi = 1 0.95.  The curvature
-term depends on the particles only through the colour gradient, which vanishes in the bulk,
-so it adds no bulk stiffness.
+keeps a plastic deformation; with phi = 0.9 it is 0.94 at R_drop = 10 dx but 0.83 at 20 dx
+(the cohesion's share of the stiffness grows with R_drop / R).  The curvature term depends
+on the particles only through the colour gradient, which vanishes in the bulk, so it adds
+no bulk stiffness: with phi = 1 the period is resolution-independent, 1.072 / 1.073
+T_Rayleigh at R_drop = 10 / 20 dx (hexagonal calibration; 0.897 / 0.888 with the square
+one): the tension of this particle model depends on the particle arrangement by
+~+-15 %, which the lattice calibration cannot remove; the 5 % goal is not met.
 
-Adhesion (the paper's adhesion kernel replaced by the cohesion kernel C, so that wall and
-liquid interact through the same pair potential): the work of adhesion of that potential is
-2 gamma_a rho0^2 R^2 S_c (twice its lattice tension), and Young-Dupre sets it to
-sigma (1 + cos theta), theta = ``akinci_contact_angle`` (degrees; unset: no adhesion).
-Both tension terms see the wall as vacuum (normals and cohesion over fluid neighbours), so
-the solid-liquid tension without adhesion is sigma and the relation holds for any phi.
-The wall's repulsion is the wall model's pressure (Adami et al. 2012).
+Wetting (Akinci's adhesion replaced by a construction with a Young relation for both terms):
+the wall carries the colour psi = (1 + cos theta) / 2, theta = ``akinci_contact_angle``
+(degrees; unset: psi = 0, theta = 180): in the normals, n_i = R (sum_fluid V_j grad_i W_ij
++ psi sum_wall V_b grad_i W_ib), and as the adhesion pair potential gamma_a = psi gamma
+with the cohesion kernel (wall particles at the rest density).  For the pair potential the
+work of adhesion is psi times the work of cohesion 2 sigma_c; the curvature term is a
+discrete Korteweg force (-gamma_k sum (n_i - n_j) ~ grad lap C), whose interface tensions
+scale with the square of the colour jump: sigma_LV = sigma, sigma_SL = (1 - psi)^2 sigma,
+sigma_SV = psi^2 sigma.  Either way Young's law gives cos theta = 2 psi - 1.  For the
+curvature term the wall particles take part with weight psi and normals of the same colour
+field (their fluid neighbours plus psi times their wall neighbours, the latter computed once
+while the walls do not move): a flat wall acting on a fluid particle through its normal
+alone would push it only along the wall normal, and the contact line would not move.  The
+wall's repulsion is the wall model's pressure (Adami et al. 2012); the wall pairs of this
+pass are not added to the walls' ``f_fluid``.
 
 Time step: the capillary limit of :meth:`FluidSolver.dt_limits` with the sigma the
 constants represent; weakly compressible runs need rho0 c0^2 >> the largest pressure,
@@ -60,9 +73,11 @@ from functools import lru_cache
 import numpy as np
 from numba import njit, prange
 
+from sphfem.fluid.passes import grad_factor
 from sphfem.fluid.surface import color_gradient
 from sphfem.fluid.surface_tension import SurfaceTensionMethod, register
 from sphfem.kernels import FASTMATH
+from sphfem.neighbors import build_neighbor_list
 from sphfem.particles import FLUID, WALL
 from sphfem.schema import Param
 from sphfem.smallmat import pair_sep
@@ -97,49 +112,74 @@ def _wendland_dwdq(q, dim):
     return c * (-20.0 * q * (1.0 - q) ** 3)
 
 
-@lru_cache(maxsize=32)
 def lattice_tensions(dim: int, R_over_dx: float) -> tuple[float, float]:
-    """(S_c, S_k): tension of a flat interface per unit gamma rho0^2 R^2 (cohesion) and per
-    unit gamma_k rho0 R^2 (curvature term), from the pair sums over a square / cubic lattice
-    of spacing dx (a slab 4 R thick, unbounded sideways, normals from the Wendland C2 kernel).
+    """(S_c, S_k) of :func:`lattice_sums`."""
+    return lattice_sums(dim, R_over_dx)[:2]
 
-    Mechanical tension of the slab's two faces: 2 sigma = int (P_N - P_T) dz with the pair
-    virial P_ab V = sum_{i<j} (x_i - x_j)_a F_ij,b; in equilibrium the EOS pressure cancels
-    the normal stress, so the curvature term (forces along the normal) counts through its
-    normal stress alone.  Per lattice column (area dx^(dim-1)):
 
-        2 sigma_c = 1/2 sum_l sum_o gamma m^2 C(|o|) (o_x^2 - o_n^2) / |o|
-        2 sigma_k = 1/2 sum_l sum_o m gamma_k o_n (n_l - n_(l+o))_n   (paper's sign)
+def _slab(dim: int, R: float):
+    """A slab of particles at unit number density, ``layers`` rows along the last axis,
+    periodic sideways (period >= 2 R + one spacing): 2D hexagonal (rows along x), 3D simple
+    cubic.  Returns (positions, row index, lateral periods)."""
+    if dim == 2:
+        a = math.sqrt(2.0 / math.sqrt(3.0))  # unit density: a^2 sqrt(3)/2 = 1
+        dy = a * math.sqrt(3.0) / 2.0
+        ncol = int(math.ceil((2 * R + a) / a))
+        rows = int(math.ceil(4 * R / dy))
+        xs = [((c + 0.5 * (r % 2)) * a, r * dy) for r in range(rows) for c in range(ncol)]
+        row = np.repeat(np.arange(rows), ncol)
+        return np.array(xs), row, np.array([ncol * a])
+    ncol = int(math.ceil(2 * R + 1))
+    rows = int(math.ceil(4 * R))
+    g = np.meshgrid(np.arange(ncol), np.arange(ncol), np.arange(rows), indexing="ij")
+    x = np.stack([v.ravel() for v in g], 1).astype(float)
+    return x, x[:, 2].astype(int), np.array([float(ncol), float(ncol)])
 
-    over the layers l and the offsets o (|o| < R) that stay inside the slab.
+
+@lru_cache(maxsize=32)
+def lattice_sums(dim: int, R_over_dx: float) -> tuple[float, float, float]:
+    """(S_c, S_k, P_k): tension of a flat interface per unit gamma rho0^2 R^2 (cohesion) and
+    per unit gamma_k rho0 R^2 (curvature term), and the largest normal stress of the
+    curvature forces per unit gamma_k rho0 R, from pair sums over a slab (4 R thick,
+    periodic sideways) of a hexagonal (2D) / simple cubic (3D) lattice of number density
+    1/dx^dim, normals from the Wendland C2 kernel.  The hexagonal lattice is what the
+    surface of a relaxed 2D particle set (and the staggered ring packing of the droplets)
+    resembles; the represented sigma depends on the arrangement: on the square lattice
+    (2D, R = 3 dx) S_k is 2.36 instead of 3.21 and S_c 0.00431 instead of 0.00415, and a
+    2D droplet calibrated on the square lattice had a 27 % too large Laplace pressure.
+
+    Mechanical tension of the slab's two faces: 2 sigma A = int (P_N - P_T) dz A with the
+    pair virial (Irving-Kirkwood), r = x_j - x_i, over ordered pairs (i, j):
+
+        4 sigma_c A = sum gamma m^2 C(|r|) (r_x^2 - r_n^2) / |r|
+        4 sigma_k A = sum m gamma_k r_n (n_i - n_j)_n        (paper's sign)
+
+    (in equilibrium the EOS pressure cancels the normal stress, so the curvature term,
+    whose forces are normal to the slab, counts through its normal stress alone).  P_k:
+    the normal force per area of each row accumulated from the face.
     """
-    a = int(math.ceil(R_over_dx))
-    rng = np.arange(-a, a + 1)
-    grids = np.meshgrid(*([rng] * dim), indexing="ij")
-    o = np.stack([g.ravel() for g in grids], 1).astype(float)  # in units of dx
-    d = np.sqrt((o**2).sum(1))
-    keep = (d > 0) & (d < R_over_dx)
-    o, d = o[keep], d[keep]
-    q = d / R_over_dx
-    L = int(math.ceil(4 * R_over_dx))
-    # units: dx = 1, R = R_over_dx, rho0 = 1 (m = 1, V = 1)
     R = R_over_dx
-    C = _akinci_c(q) / R**dim
-    F = -_wendland_dwdq(q, dim) / R**dim / R / d  # grad_i W_ij = F r, r = x_j - x_i
-    on = o[:, -1]  # the normal axis (last): layers along it
-    nrm = np.zeros(L)
-    for lay in range(L):
-        ok = (lay + on >= 0) & (lay + on < L)
-        nrm[lay] = R * np.sum(F[ok] * on[ok])
-    sc = 0.0
-    sk = 0.0
-    for lay in range(L):
-        ok = (lay + on >= 0) & (lay + on < L)
-        sc += np.sum(C[ok] * (o[ok, 0] ** 2 - on[ok] ** 2) / d[ok])
-        j = (lay + on[ok]).astype(int)
-        sk += np.sum(on[ok] * (nrm[lay] - nrm[j]))
-    # per face (/2), pairs counted twice (/2); in units rho0^2 R^2 gamma and rho0 R^2 gamma_k
-    return 0.25 * sc / R**2, 0.25 * sk / R**2
+    x, row, per = _slab(dim, R)
+    d = x[None, :, :] - x[:, None, :]  # r = x_j - x_i
+    for k in range(dim - 1):  # minimum image sideways
+        d[..., k] -= per[k] * np.round(d[..., k] / per[k])
+    dist = np.sqrt((d**2).sum(-1))
+    m = (dist > 0) & (dist < R)
+    dd = np.where(m, dist, 1.0)
+    q = np.where(m, dist / R, 1.0)
+    F = np.where(m, -_wendland_dwdq(q, dim) / R**dim / R / dd, 0.0)
+    nrm = R * np.einsum("ij,ij->i", F, d[..., -1])  # normal component (V = 1)
+    C = np.where(m, _akinci_c(q) / R**dim, 0.0)
+    A = float(np.prod(per))
+    rn = d[..., -1]
+    S_c = float(np.sum(C * (d[..., 0] ** 2 - rn**2) / dd)) / (4 * A * R * R)
+    dn = nrm[:, None] - nrm[None, :]
+    S_k = float(np.sum(np.where(m, rn * dn, 0.0))) / (4 * A * R * R)
+    fy = -np.where(m, dn, 0.0).sum(1)  # paper's sign, per particle (m = 1)
+    rows = row.max() + 1
+    per_row = np.bincount(row, weights=fy, minlength=rows) / A
+    P_k = float(np.abs(np.cumsum(per_row[: rows // 2])).max())
+    return S_c, S_k, P_k / R
 
 
 def akinci_constants(sigma: float, rho0: float, R: float, dx: float, dim: int,
@@ -166,16 +206,19 @@ def internal_pressure(gamma: float, rho0: float, R: float, dim: int) -> float:
 
 def akinci_c0_pressure(sigma: float, rho0: float, R: float, dx: float, dim: int,
                        R_drop: float, share: float = CURVATURE_DEFAULT) -> float:
-    """The largest pressure [Pa] the model puts on the EOS in a drop of radius ``R_drop``:
-    the Laplace pressure plus the cohesion's internal pressure (what rho0 c0^2 must exceed
-    ~100-fold for a 1 % density variation)."""
-    gamma = akinci_constants(sigma, rho0, R, dx, dim, share)[0]
-    return (dim - 1) * sigma / R_drop - internal_pressure(gamma, rho0, R, dim)
+    """The largest pressure [Pa] the model puts on the EOS in a drop of radius ``R_drop``
+    (what rho0 c0^2 must exceed ~100-fold for a 1 % density variation): the Laplace
+    pressure plus the larger of the cohesion's internal (virial) pressure and the normal
+    stress of the curvature forces in the surface layers (:func:`lattice_sums`), both of
+    order sigma / R."""
+    gamma, gamma_k = akinci_constants(sigma, rho0, R, dx, dim, share)
+    P_k = lattice_sums(dim, round(R / dx, 6))[2] * gamma_k * rho0 * R
+    return (dim - 1) * sigma / R_drop + max(-internal_pressure(gamma, rho0, R, dim), P_k)
 
 
 def adhesion_ratio(theta_deg: float | None) -> float:
-    """(1 + cos theta) / 2: the work of adhesion over the work of cohesion 2 sigma
-    (Young-Dupre; None: no adhesion)."""
+    """The wall's colour psi = (1 + cos theta) / 2 for the contact angle ``theta_deg``
+    (None: 0, no wetting; module doc)."""
     if theta_deg is None:
         return 0.0
     return 0.5 * (1.0 + math.cos(math.radians(theta_deg)))
@@ -195,7 +238,7 @@ def _akinci_shape(q):
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
-def akinci_accel(x, m, V, rho, kind, offsets, indices, R, gamma, gamma_k, gamma_a, rho0,
+def akinci_accel(x, m, V, rho, kind, offsets, indices, R, gamma, gamma_k, gamma_a, psi, rho0,
                  period, nrm, acc):
     """acc[i] += Akinci cohesion + curvature (fluid j) + adhesion (wall j) on fluid rows;
     ``nrm`` = R grad C over fluid neighbours (into the liquid), ``gamma_k`` [m/s^2],
@@ -219,7 +262,7 @@ def akinci_accel(x, m, V, rho, kind, offsets, indices, R, gamma, gamma_k, gamma_
         for jj in range(offsets[i], offsets[i + 1]):
             j = indices[jj]
             fluid = kind[j] == FLUID
-            if not fluid and (kind[j] != WALL or gamma_a == 0.0):
+            if not fluid and (kind[j] != WALL or psi == 0.0):
                 continue
             r0, r1, r2 = pair_sep(x, i, j, dim, period, periodic)
             d2 = r0 * r0 + r1 * r1 + r2 * r2
@@ -236,13 +279,14 @@ def akinci_accel(x, m, V, rho, kind, offsets, indices, R, gamma, gamma_k, gamma_
                     a1 += fc * r1 + fk * (ni1 - nrm[j, 1])
                 if dim > 2:
                     a2 += fc * r2 + fk * (ni2 - nrm[j, 2])
-            else:  # adhesion to the wall particle (rest mass rho0 V_b)
+            else:  # wall of colour psi: adhesion (rest mass rho0 V_b) and curvature pair
                 fa = gamma_a * rho0 * V[j] * _akinci_shape(d / R) / (Rd * d)
-                a0 += fa * r0
+                fw = -psi * gamma_k
+                a0 += fa * r0 + fw * (ni0 - nrm[j, 0])
                 if dim > 1:
-                    a1 += fa * r1
+                    a1 += fa * r1 + fw * (ni1 - nrm[j, 1])
                 if dim > 2:
-                    a2 += fa * r2
+                    a2 += fa * r2 + fw * (ni2 - nrm[j, 2])
         acc[i, 0] += a0
         if dim > 1:
             acc[i, 1] += a1
@@ -255,11 +299,45 @@ def _share(pa) -> float:
     return CURVATURE_DEFAULT if v is None else float(v)
 
 
+@njit(cache=True, parallel=True, fastmath=FASTMATH)
+def wall_rows_gradient(x, V, kind, offsets, indices, R, sigma, kernel_code, period, g):
+    """g[b] = sum_fluid V_j grad_b W_bj for wall rows b (their fluid neighbours)."""
+    n, dim = x.shape
+    fac2 = sigma / (R * R)
+    R2 = R * R
+    periodic = False
+    for k in range(dim):
+        periodic |= period[k] > 0.0
+    for i in prange(n):
+        if kind[i] != WALL:
+            continue
+        g0 = 0.0
+        g1 = 0.0
+        g2 = 0.0
+        for jj in range(offsets[i], offsets[i + 1]):
+            j = indices[jj]
+            if kind[j] != FLUID:
+                continue
+            r0, r1, r2 = pair_sep(x, i, j, dim, period, periodic)
+            d2 = r0 * r0 + r1 * r1 + r2 * r2
+            if d2 >= R2 or d2 == 0.0:
+                continue
+            t = V[j] * grad_factor(np.sqrt(d2), R, fac2, kernel_code)
+            g0 += t * r0
+            g1 += t * r1
+            g2 += t * r2
+        g[i, 0] = g0
+        if dim > 1:
+            g[i, 1] = g1
+        if dim > 2:
+            g[i, 2] = g2
+
+
 def _calibrate(pa, m_bar: float, R: float, dim: int):
     """((gamma, gamma_k, gamma_a), the sigma they represent) on the lattice of the mean
     particle spacing dx = (m_bar / rho0)^(1/dim): from the material's sigma, or from
     ``akinci_gamma`` (gamma_k then keeps the share ``akinci_curvature``); gamma_a from the
-    contact angle (Young-Dupre, module doc)."""
+    contact angle (the wall colour psi, module doc)."""
     dx = (m_bar / pa.rho0) ** (1.0 / dim)
     share = _share(pa)
     S_c, S_k = lattice_tensions(dim, round(R / dx, 6))
@@ -272,10 +350,10 @@ def _calibrate(pa, m_bar: float, R: float, dim: int):
             raise ValueError("akinci_gamma needs akinci_curvature < 1 (gamma is the cohesion's)")
         sig = gamma * pa.rho0**2 * R**2 * S_c / (1.0 - share)
         gamma_k = share * sig / (pa.rho0 * R * R * S_k)
-    # work of adhesion sigma (1 + cos theta) = 2 x the tension of the adhesion pair potential
-    gamma_a = sig * adhesion_ratio(_param(pa, "akinci_contact_angle", None)) / (
-        pa.rho0**2 * R**2 * S_c)
-    return (float(gamma), float(gamma_k), float(gamma_a)), float(sig)
+    # wetting (module doc): the wall's colour psi = (1 + cos theta) / 2 in the normals and
+    # the adhesion pair potential gamma_a = psi gamma
+    psi = adhesion_ratio(_param(pa, "akinci_contact_angle", None))
+    return (float(gamma), float(gamma_k), float(psi * gamma), float(psi)), float(sig)
 
 
 def _param(pa, key, default):
@@ -284,23 +362,57 @@ def _param(pa, key, default):
 
 
 class AkinciState:
-    """Work array of the pass: the normals n = R grad C (fluid rows)."""
+    """Work arrays of the pass: the normals n = R grad C of fluid and wall rows, the colour
+    gradient over fluid and wall neighbours, and the walls' own part of theirs (walls do not
+    move: computed once, from a list of the wall particles alone)."""
 
     def __init__(self, n: int, dim: int):
         self.n = n
         self.nrm = np.zeros((n, dim))
+        self.gall = np.zeros((n, dim))
+        self.gww = None
+        self.wall_key = None
+
+
+def _wall_wall_gradient(solver, state):
+    """sum_wall V_b' grad_b W_bb' of every wall row b (kept while the walls do not move)."""
+    p = solver.p
+    w = np.flatnonzero(p.kind == WALL)
+    key = (w.size, float(p.x[w].sum()) if w.size else 0.0)
+    if state.gww is not None and state.wall_key == key:
+        return state.gww
+    g = np.zeros((p.n, solver.dim))
+    if w.size:
+        xw = np.ascontiguousarray(p.x[w])
+        nl = build_neighbor_list(xw, solver.R, xw.min(0) - solver.R, xw.max(0) + solver.R,
+                                 solver.period)
+        gw = np.zeros_like(xw)
+        color_gradient(xw, np.ascontiguousarray(p.vol[w]), np.full(w.size, FLUID, p.kind.dtype),
+                       nl.offsets, nl.indices, solver.R, solver.sigma, solver.kernel_code,
+                       solver.period, True, gw)
+        g[w] = gw
+    state.gww, state.wall_key = g, key
+    return g
 
 
 def _accelerate(solver, state):
     p, s, nl, R, pa = solver.p, solver._scratch, solver.nbrs, solver.R, solver.params
     if state is None or state.n != p.n:
         state = AkinciState(p.n, solver.dim)
+    gamma, gamma_k, gamma_a, psi = solver.st_constant
     color_gradient(p.x, s.V, p.kind, nl.offsets, nl.indices, R, solver.sigma, solver.kernel_code,
                    solver.period, True, state.nrm)
+    if psi > 0.0:  # the wall's colour psi: n = R (grad C_fluid + psi grad C_wall), all rows
+        color_gradient(p.x, s.V, p.kind, nl.offsets, nl.indices, R, solver.sigma,
+                       solver.kernel_code, solver.period, False, state.gall)
+        state.nrm += psi * (state.gall - state.nrm)
+        wall_rows_gradient(p.x, s.V, p.kind, nl.offsets, nl.indices, R, solver.sigma,
+                           solver.kernel_code, solver.period, state.gall)
+        wall = p.kind == WALL
+        state.nrm[wall] = state.gall[wall] + psi * _wall_wall_gradient(solver, state)[wall]
     state.nrm *= R
-    gamma, gamma_k, gamma_a = solver.st_constant
     akinci_accel(p.x, p.m, s.V, p.rho, p.kind, nl.offsets, nl.indices, R, gamma, gamma_k,
-                 gamma_a, pa.rho0, solver.period, state.nrm, p.acc)
+                 gamma_a, psi, pa.rho0, solver.period, state.nrm, p.acc)
     return state
 
 
@@ -311,7 +423,7 @@ METHOD = register(SurfaceTensionMethod(
     doc="cohesion + curvature of Akinci et al. (2013) with adhesion to walls; both terms "
         "calibrated to sigma by lattice sums of the flat-interface tension, akinci_curvature "
         "the curvature term's share (default 1: the cohesion makes the particle lattice "
-        "elastic), adhesion from the contact angle by Young-Dupre (see "
+        "elastic), wetting from the contact angle (see "
         "sphfem.fluid.surface_tension_akinci2013)",
     params=(
         Param("akinci_gamma", float, None, positive=True, when=_WHEN,
@@ -321,8 +433,9 @@ METHOD = register(SurfaceTensionMethod(
               doc="share of sigma carried by the curvature term (0: cohesion only); "
                   "both terms calibrated by lattice sums"),
         Param("akinci_contact_angle", float, None, ge=0.0, le=180.0, when=_WHEN,
-              doc="equilibrium contact angle on walls [deg]: wall adhesion gamma_a = gamma "
-                  "(1 + cos theta) / 2 (Young-Dupre); unset: no adhesion (180 deg)"),
+              doc="equilibrium contact angle on walls [deg]: the wall's colour psi = "
+                  "(1 + cos theta) / 2 in the normals and the adhesion gamma_a = psi gamma; "
+                  "unset: no wetting (180 deg)"),
     ),
     constant_key="akinci_gamma",
     calibrate=_calibrate,

@@ -541,49 +541,92 @@ def run_droplet(dim: int, n_radius: int, model: str = "csf", periods: float = 1.
     return Tm, T, s, msg, Dn, extra
 
 
+#: relaxation at rest (Rayleigh periods) of the Akinci runs before the mode is imposed
+AKINCI_RELAX = 0.3
+#: largest surface ripple (rms radial deviation from the l <= 4 shape) accepted [dx]
+RIPPLE_MAX = 0.5
+
+
+def _ripple_growth(r: Run) -> float:
+    """Late ripple minus 1.5 x the early one (+ 0.02 dx of sampling noise): <= 0 when the
+    surface ripple does not grow over the run."""
+    return r.extra["ripple_late_over_dx"] - 1.5 * r.extra["ripple_early_over_dx"] - 0.02
+
+
 @register("droplet-oscillation")
 def droplet_case(quick: bool = False) -> CaseResult:
-    """2D and 3D droplets in mode l = 2, zero gravity: period vs Rayleigh (10 %), CSF."""
+    """2D and 3D droplets in mode l = 2, zero gravity: period vs Rayleigh (CSF 10 %; Akinci
+    reported, it runs stably), and the surface ripple (2D, bounded and not growing)."""
     run_droplet(2, 4, "csf", periods=0.05)  # compile
-    plan = [(2, n, "csf") for n in ((10, 20) if quick else (10, 20, 30))]
+    plan = [(2, n, "csf") for n in ((10, 20) if quick else (10, 20, 30, 40))]
     plan += [(3, n, "csf") for n in ((8,) if quick else (8, 12))]
-    if not quick:  # the other models, reported (not calibrated to pass)
-        plan += [(2, 20, "iif"), (3, 8, "iif"), (2, 20, "akinci")]
+    plan += [(2, n, "akinci") for n in ((10,) if quick else (10, 20, 30))]
+    if not quick:  # the IIF model, reported (not calibrated to pass)
+        plan += [(2, 20, "iif"), (3, 8, "iif")]
     runs = []
     for dim, n, model in plan:
+        relax = AKINCI_RELAX if model == "akinci" else 0.0
         with Timer() as tm:
-            Tm, T, s, msg, Dn, extra = run_droplet(dim, n, model)
+            Tm, T, s, msg, Dn, extra = run_droplet(dim, n, model, relax=relax)
         err = abs(Tm / T - 1) if np.isfinite(Tm) else float("nan")
         runs.append(Run(f"{model} {dim}D", 1.0 / n, int(s.p.n), err, err, tm.s,
                         {"steps": s.step_count, "period_s": Tm, "rayleigh_s": T,
                          "D_final_over_max": float(Dn[-1]),
                          "D_min_over_max": float(Dn.min()), "status": msg, **extra}))
     crit = {}
+
+    def worst(rs):
+        return max((r.error_l2 if np.isfinite(r.error_l2) else math.inf) for r in rs)
+
     for dim in (2, 3):
         rs = [r for r in runs if r.variant == f"csf {dim}D"]
-        worst = max((r.error_l2 if np.isfinite(r.error_l2) else math.inf) for r in rs)
         crit[f"csf_{dim}d_period"] = Criterion(
             f"largest |T/T_Rayleigh - 1| of the CSF model (recommended), {dim}D, all "
-            "resolutions", worst, 0.10)
+            "resolutions", worst(rs), 0.10)
+    ak = [r for r in runs if r.variant == "akinci 2D"]
+    crit["akinci_2d_runs"] = Criterion(
+        "Akinci 2D runs that did not complete 1.6 periods with two zero crossings of D",
+        float(sum(r.extra["status"] != "completed" or not np.isfinite(r.error_l2)
+                  for r in ak)), 0.0)
+    flat = [r for r in runs if r.variant in ("csf 2D", "akinci 2D")]
+    crit["ripple_bounded"] = Criterion(
+        "largest surface ripple over the last third of the run [dx], CSF and Akinci 2D",
+        max(r.extra["ripple_late_over_dx"] for r in flat), RIPPLE_MAX)
+    crit["ripple_not_growing"] = Criterion(
+        "largest (late ripple - 1.5 early ripple - 0.02 dx), CSF and Akinci 2D (> 0: grows)",
+        max(_ripple_growth(r) for r in flat), 0.0)
     notes = ["R = 1 mm, rho = 1000 kg/m^3, sigma = 0.072 N/m, mu = 1e-3 Pa s "
              "(Ohnesorge 0.0037: the period is the inviscid one, Lamb's viscous correction "
-             "is < 0.01 %), c0 = max(10 V0, sqrt(100 p_L/rho)) (1 % density change under the "
-             "Laplace pressure p_L), delta = 0.1, artificial viscosity alpha = 0.02 (damps "
-             "particle-scale surface noise; it damps the mode but shifts the period by "
-             "(gamma/omega)^2/2 < 1 %), R_kernel = 3 dx.  Ring / shell packing started at "
-             "the Laplace density, l = 2 velocity perturbation of amplitude eps = 0.1 "
-             "of R; 1.6 Rayleigh periods; period = 2 x mean zero-crossing spacing of the "
-             "shape moment D.",
-             "Criterion on the CSF model (surface_tension = \"csf\", the recommended one).  "
-             "The IIF (eq. 2.78, calibrated from sigma) and Akinci rows are reported "
-             "variants ('status' in --json): from this start the IIF 2D run and the Akinci "
-             "run stop on the speed guard within the first 50 steps, the IIF 3D droplet "
-             "never oscillates through the sphere (D does not change sign: the "
-             "elasto-plastic response of the pair-force lattice); see sphfem.fluid.surface.",
+             "is < 0.01 %), c0 = max(10 V0, sqrt(100 p_max/rho), sqrt(2 pi sigma/(rho h))) "
+             "(1 % density change under the model's largest pressure p_max: the Laplace "
+             "pressure, for Akinci with a cohesion also its internal pressure; the capillary "
+             "wave speed at h = R_kernel/2: below it particle-scale ripples grow, see "
+             "sphfem.fluid.surface_tension_csf), delta = 0.1, artificial viscosity alpha = "
+             "0.02, R_kernel = 3 dx.  Ring / shell packing started at the Laplace density, "
+             "l = 2 velocity perturbation of amplitude eps = 0.1 of R; 1.6 Rayleigh periods; "
+             "period = 2 x mean zero-crossing spacing of the shape moment D.",
+             f"Akinci rows: first {AKINCI_RELAX} Rayleigh periods at rest (velocities zeroed "
+             "every T/400) so that the mode starts from the model's own equilibrium; default "
+             "share of the curvature term (1, no cohesion: with the cohesion's pair potential "
+             "the lattice is elastic and the period was 0.39-0.45 T_Rayleigh), constants from "
+             "hexagonal-lattice sums (sphfem.fluid.surface_tension_akinci2013).  The goal of "
+             "a period within 5 % is NOT met: it is 1.07 T_Rayleigh at every resolution run "
+             "(R/dx = 10, 20; 0.89 with square-lattice constants): the tension of this "
+             "particle model depends on the arrangement of the surface particles; the "
+             "criterion checks only that the runs complete.",
+             "Surface ripple (2D): rms deviation [dx] of the outermost particle per angular bin "
+             "from the drop's Fourier shape up to l = 4 (sphfem.validation.fluid."
+             "surface_ripple), largest value over the first ('early') and last ('late') third "
+             "of the samples; before the capillary-speed rule the CSF run at R/dx = 40 grew "
+             "from 0.01 to > 1 dx between 1.2 and 1.6 periods.",
+             "IIF rows (eq. 2.78, calibrated from sigma) are reported variants ('status' in "
+             "--json): the 2D run stops on the speed guard, the 3D droplet never oscillates "
+             "through the sphere (elasto-plastic pair-force lattice).",
              "'com_drift_over_R' and 'momentum_over_M_V0' measure the CSF's lack of exact "
              "momentum conservation (0 for the pairwise IIF / Akinci forces)."]
     return CaseResult("droplet-oscillation", runs, criteria=crit, notes=notes,
                       resolution_label="dx/R",
                       extra_columns={"steps": "steps", "period_s": "T sph",
                                      "rayleigh_s": "T Rayleigh",
-                                     "D_min_over_max": "Dmin/Dmax"})
+                                     "D_min_over_max": "Dmin/Dmax",
+                                     "ripple_late_over_dx": "ripple/dx"})
