@@ -726,56 +726,58 @@ _FIND_BLOCK = 1 << 21
 
 
 def _find_simplices(mesh, mapping, X: np.ndarray) -> np.ndarray:
-    """The element holding each point of X (dim, n) on a simplex mesh: scikit-fem's
-    ``element_finder`` rule in blocks of candidate elements, the same elements in bounded
-    memory.
+    """The element holding each point of X (dim, n) on a simplex mesh, in bounded memory.
 
-    scikit-fem's finder (``MeshTet1`` / ``MeshTri1``) takes the 10 (3D; 2D: 5) elements
-    with the nearest centroids of every point, the union ``ix`` of them all in order of
-    first appearance, and maps *every* point into *every* element of ``ix`` at once: an
-    array of 3 x |ix| x n reference coordinates (the 19,200 sensor points of the droplet
-    job against ~6,000 candidates: 2.8 GB, twice over with the temporaries).  Each point
-    gets the first element of ``ix`` that contains it (reference coordinates >= -eps,
-    barycentric sum <= 1 + dim eps); when some point has none, all points are searched
-    again over all elements in index order.  Here the candidates are visited in the same
-    order in blocks of about ``_FIND_BLOCK`` / n elements and a point keeps its first hit,
-    with at most ``_FIND_BLOCK`` entries at a time.  The element is scikit-fem's, except
-    where a point lies on a face shared by two elements to within round-off: numpy's
-    einsum rounds the reference coordinates differently for different array shapes (an
-    ulp), so which of the two passes the -eps test can differ (24 of the 5,001 mesh
-    vertices of the droplet job's mesh; none of its sensor and probe points).  Either
-    element holds the point; interpolated values then differ by round-off.
+    First pass: each point is mapped into its own k nearest elements by centroid (k = 10 in
+    3D, 5 in 2D, scikit-fem's ``element_finder`` candidates) through the cached affine
+    inverse maps, xi = J^-1 (x - p0), and keeps the nearest one that holds it (reference
+    coordinates >= -eps, barycentric sum <= 1 + dim eps, scikit-fem's test): k maps per
+    point.  scikit-fem's finder maps *every* point into the union of *all* points'
+    candidates (3 x |union| x n reference coordinates: the 32,000 sensor points of the
+    droplet job against ~6,000 candidates cost a minute in blocks).  Points no candidate
+    holds are searched over every element in blocks of about ``_FIND_BLOCK`` / n elements.
+    A point inside one element gets scikit-fem's element; a point on a face shared by two
+    elements (to within round-off) may get the other one: either holds it, and interpolated
+    values then differ by round-off.
     """
     from scipy.spatial import cKDTree
+
+    from sphfem.fem.assembly import _inv_det, affine_jacobians
 
     dim, n = X.shape
     nelems = mesh.t.shape[1]
     if not hasattr(mesh, "_cached_tree"):  # the tree scikit-fem's finder caches too
         mesh._cached_tree = cKDTree(np.mean(mesh.p[:, mesh.t], axis=1).T)
-    ix = mesh._cached_tree.query(X.T, min(10 if dim == 3 else 5, nelems))[1].flatten()
-    _, first = np.unique(ix, return_index=True)
-    ix = ix[np.sort(first)]
+    if not hasattr(mesh, "_cached_inverse_maps"):
+        invJ, _ = _inv_det(affine_jacobians(mesh))
+        mesh._cached_inverse_maps = (invJ, np.ascontiguousarray(mesh.p[:, mesh.t[0]].T))
+    invJ, p0 = mesh._cached_inverse_maps
+    k = min(10 if dim == 3 else 5, nelems)
+    cand = mesh._cached_tree.query(X.T, k)[1].reshape(n, k)
     eps = np.finfo(np.float64).eps
     found = np.full(n, -1, dtype=np.int64)
-    for cand in (ix, None):
-        if cand is None:
-            cand = np.arange(nelems, dtype=np.int64)
-            found[:] = -1  # scikit-fem's second pass searches again for every point
-        block = max(1, _FIND_BLOCK // max(n, 1))
-        for b0 in range(0, len(cand), block):
-            todo = np.flatnonzero(found < 0)
-            if todo.size == 0:
-                break
-            el = cand[b0:b0 + block]
-            R = mapping.invF(X[:, None, todo], el)  # (dim, block, len(todo))
-            rest = 1 - R[0] - R[1]  # scikit-fem's expression, the same rounding
-            if dim == 3:
-                rest = rest - R[2]
-            inside = (R >= -eps).all(axis=0) & (rest >= -dim * eps)
-            hit = inside.any(axis=0)
-            found[todo[hit]] = el[inside[:, hit].argmax(axis=0)]
-        if np.all(found >= 0):
+    chunk = max(1, _FIND_BLOCK // (k * dim))
+    for s0 in range(0, n, chunk):
+        c = cand[s0:s0 + chunk]  # (m, k)
+        d = X[:, s0:s0 + chunk].T[:, None, :] - p0[c]  # (m, k, dim)
+        R = np.einsum("mkij,mkj->mki", invJ[c], d)
+        inside = (R >= -eps).all(axis=-1) & (1 - R.sum(axis=-1) >= -dim * eps)
+        hit = inside.any(axis=1)
+        found[s0:s0 + chunk][hit] = c[hit, inside[hit].argmax(axis=1)]
+    todo = np.flatnonzero(found < 0)
+    block = max(1, _FIND_BLOCK // max(todo.size, 1))
+    for b0 in range(0, nelems, block):
+        if todo.size == 0:
             return found
+        el = np.arange(b0, min(b0 + block, nelems))
+        R = mapping.invF(X[:, None, todo], el)  # (dim, block, len(todo))
+        rest = 1 - R.sum(axis=0)
+        inside = (R >= -eps).all(axis=0) & (rest >= -dim * eps)
+        hit = inside.any(axis=0)
+        found[todo[hit]] = el[inside[:, hit].argmax(axis=0)]
+        todo = todo[~hit]
+    if todo.size == 0:
+        return found
     raise ValueError("Point is outside of the mesh.")
 
 
