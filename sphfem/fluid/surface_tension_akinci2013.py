@@ -4,9 +4,10 @@ Cohesion + curvature of Akinci, Akinci & Teschner (2013, ACM TOG 32(6) 182) betw
 particles, and their adhesion to wall particles:
 
     a_i = sum_j K_ij [ gamma m_j C(d) r/d  -  gamma_k (n_i - n_j) ]        (fluid j)
-        + sum_b gamma_a rho0 V_b C(d) r/d                                   (wall b)
+        + sum_b [ gamma_a rho0 V_b C(d) r/d  -  psi gamma_k (n_i - n_b) ]   (wall b)
 
-    K_ij = 2 rho0 / (rho_i + rho_j),   n_i = R sum_j V_j grad_i W_ij   (fluid j),
+    K_ij = 2 rho0 / (rho_i + rho_j),
+    n_i = R (sum_fluid V_j grad_i W_ij + psi sum_wall V_b grad_i W_ib),
     C(d) = (32/pi) R^-dim { (1-q)^3 q^3            if 1/2 < q <= 1
                             2 (1-q)^3 q^3 - 1/64   if 0 < q <= 1/2 }.
 
@@ -35,9 +36,10 @@ Why phi defaults to 1 (no cohesion): the cohesion is a pair potential; a particl
 held by it is an elastic solid with a shear modulus of the order of its internal pressure
 ~sigma / R, far above the capillary stress sigma / R_drop.  Measured on the 2D droplet of
 ``sphfem validate droplet-oscillation`` (R_drop = 10 dx, started from rest in the model's
-equilibrium): the l = 2 period is 0.39-0.45 of Rayleigh's with phi = 0-0.25 and the drop
-keeps a plastic deformation; with phi = 0.9 it is 0.94 at R_drop = 10 dx but 0.83 at 20 dx
-(the cohesion's share of the stiffness grows with R_drop / R).  The curvature term depends
+equilibrium; square-lattice constants, c0 from the cohesion's pressure): the l = 2 period is
+0.39-0.45 of Rayleigh's with phi = 0-0.25 and the drop keeps a plastic deformation; with
+phi = 0.9 it is 0.94 at R_drop = 10 dx but 0.83 at 20 dx (the cohesion's share of the
+stiffness grows with R_drop / R).  The curvature term depends
 on the particles only through the colour gradient, which vanishes in the bulk, so it adds
 no bulk stiffness: with phi = 1 the period is resolution-independent, 1.072 / 1.073
 T_Rayleigh at R_drop = 10 / 20 dx (hexagonal calibration; 0.897 / 0.888 with the square
@@ -58,11 +60,15 @@ field (their fluid neighbours plus psi times their wall neighbours, the latter c
 while the walls do not move): a flat wall acting on a fluid particle through its normal
 alone would push it only along the wall normal, and the contact line would not move.  The
 wall's repulsion is the wall model's pressure (Adami et al. 2012); the wall pairs of this
-pass are not added to the walls' ``f_fluid``.
+pass are not added to the walls' ``f_fluid``.  Measured (sessile drop,
+:mod:`sphfem.validation.sessile_drop`): the contact line stays pinned near its start on the
+no-slip particle wall, so the prescribed angle is not reached (60 / 120 deg gave 86 / 96
+deg at R0/dx = 15); the angle follows from theta only through this relation.
 
 Time step: the capillary limit of :meth:`FluidSolver.dt_limits` with the sigma the
 constants represent; weakly compressible runs need rho0 c0^2 >> the largest pressure,
-:func:`akinci_c0_pressure` (Laplace plus the cohesion's internal pressure).
+:func:`akinci_c0_pressure` (Laplace plus the larger of the cohesion's internal pressure and
+the curvature forces' normal stress, both ~sigma / R).
 """
 
 from __future__ import annotations
