@@ -152,3 +152,18 @@ def test_step_operators_equal_scikit_fem(mesh, element):
         x = spsolve(M, rhs.assemble(sub.vbasis, s=S[i, j]))
         assert np.abs(Sn[:, i, j] - x).max() < 1e-11 * np.abs(S).max()
         assert np.array_equal(Sn[:, i, j], Sn[:, j, i])
+
+
+def test_axisymmetric_stress_from_tables_equals_scikit_fem_interpolation():
+    from sphfem.fem.axisymmetric import AxisymmetricFEMSubstrate, axisymmetric_stress
+
+    mesh = MeshTri1.init_tensor(np.linspace(0, 1e-3, 8), np.linspace(-4e-4, 0, 5))
+    sub = AxisymmetricFEMSubstrate(mesh.with_defaults(), 300e9, 0.21, 7e-6, element="P2",
+                                   clamps=["bottom"])
+    dT = 30.0 * np.exp(-(mesh.p[0] / 3e-4) ** 2)
+    res = sub.solve(dT_nodal=dT, tractions={"top": [0.0, -1e6]})
+    uh = sub.basis.interpolate(res.dofs)
+    assert np.abs(sub.values_qp(res.dofs) - np.asarray(uh)).max() < RTOL * np.abs(res.dofs).max()
+    S0 = axisymmetric_stress(sub.lam, sub.mu, sub.alpha, uh.grad, uh[0], sub.r_qp,
+                             sub.vbasis.interpolate(dT))
+    assert np.abs(res.stress_qp - S0).max() < 1e-12 * np.abs(S0).max()

@@ -234,10 +234,9 @@ class AxisymmetricResult(FEMResult):
         """Cauchy stress (3, 3, nelems, nqp) in the order (r, z, theta)."""
         if "stress_qp" not in self.__dict__:
             s = self.substrate
-            uh = s.basis.interpolate(self.dofs)
             self.__dict__["stress_qp"] = axisymmetric_stress(
-                s.lam, s.mu, s.alpha, uh.grad, uh[0], s.r_qp,
-                s._dT_qp(self.dT_spec))
+                s.lam, s.mu, s.alpha, s.grad_qp(self.dofs), s.values_qp(self.dofs)[0],
+                s.r_qp, s._dT_qp(self.dT_spec))
         return self.__dict__["stress_qp"]
 
     @property

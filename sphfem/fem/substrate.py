@@ -368,6 +368,7 @@ class FEMSubstrate(QuasiStaticSubstrate):
         self._u_prev = None
         self._mass = None
         self._tables = None
+        self._phi = None
         logger.info("%s: %s %s, %d dofs (%d free), %s; assembly %.2f s, "
                     "factorisation %.2f s", type(self).__name__, type(mesh).__name__, element,
                     self.basis.N, len(self.I), solver, self.timings["assemble_K"],
@@ -546,6 +547,15 @@ class FEMSubstrate(QuasiStaticSubstrate):
         ``basis``: grad u[c, k] = sum_a u_(a, c) d phi_a / d x_k."""
         G, _, edofs = self._qp_tables()
         return np.einsum("ace,akeq->ckeq", np.asarray(dofs)[edofs], G)
+
+    def values_qp(self, dofs: np.ndarray) -> np.ndarray:
+        """Displacement (dim, nelems, nqp) at the quadrature points of ``basis``:
+        u[c] = sum_a u_(a, c) phi_a."""
+        if self._phi is None:
+            sb = self.sbasis
+            self._phi = np.stack([np.asarray(sb.basis[a][0]) for a in range(sb.Nbfun)])
+        _, _, edofs = self._qp_tables()
+        return np.einsum("ace,aeq->ceq", np.asarray(dofs)[edofs], self._phi)
 
     @staticmethod
     def _interpolate_qp(basis: Basis, a: np.ndarray) -> np.ndarray:
