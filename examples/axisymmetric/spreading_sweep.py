@@ -18,6 +18,7 @@ has fallen 3 % below it.
 from __future__ import annotations
 
 import argparse
+import ast
 import json
 import math
 import sys
@@ -54,14 +55,14 @@ def groups(v, mu, sigma):
     return dc.RHO * v * v * dc.D / sigma, dc.RHO * v * dc.D / mu
 
 
-def run(case, n, tc=4.0, verbose=True, adaptive_h=False):
+def run(case, n, tc=4.0, verbose=True, adaptive_h=False, **kw):
     """One impact at D/dx = n; returns the record with the spread history.  Fixed h by
     default: with adaptive h the D/dx = 32 runs throw rings along the wall from 1.4 t_c
     (sphfem.fluid.axisymmetric's docstring; seen here at We 139, Re 1000)."""
     from sphfem.fluid.spreading import colour_contact_radius
 
     v, mu, sigma = CASES[case]
-    f, dx = ir.build(n, v, 10.0 * v, mu, adaptive_h=adaptive_h, surface_tension=sigma)
+    f, dx = ir.build(n, v, 10.0 * v, mu, adaptive_h=adaptive_h, surface_tension=sigma, **kw)
     hist = []
     t0 = time.perf_counter()
 
@@ -92,7 +93,8 @@ def run(case, n, tc=4.0, verbose=True, adaptive_h=False):
     h = np.array(hist)
     k = int(h[:, 1].argmax())
     We, Re = groups(v, mu, sigma)
-    return dict(case=case, n=n, dx=dx, adaptive_h=adaptive_h, V=v, mu=mu, sigma=sigma, We=We, Re=Re,
+    return dict(case=case, n=n, dx=dx, adaptive_h=adaptive_h, options=kw, V=v, mu=mu, sigma=sigma,
+                We=We, Re=Re,
                 fluid=int(f.fluid.sum()), steps=f.step_count,
                 seconds=time.perf_counter() - t0, t_reached=f.t * v / dc.D, error=error,
                 beta_max=float(h[k, 1]), t_max=float(h[k, 0]), at_end=k == len(h) - 1,
@@ -194,12 +196,15 @@ def main():
     ap.add_argument("--n", type=int, default=16, help="D / dx")
     ap.add_argument("--tc", type=float, default=4.0)
     ap.add_argument("--adaptive-h", action="store_true")
+    ap.add_argument("--kw", action="append", default=[], metavar="KEY=VALUE",
+                    help="more AxisymmetricFluid keywords (Python literals), repeatable")
     ap.add_argument("--out")
     a = ap.parse_args()
+    extra = {k: ast.literal_eval(x) for k, x in (s.split("=", 1) for s in a.kw)}
     if a.mode == "table":
         table(a.files, a.dir)
         return
-    res = run(a.case, a.n, a.tc, adaptive_h=a.adaptive_h)
+    res = run(a.case, a.n, a.tc, adaptive_h=a.adaptive_h, **extra)
     print(json.dumps({k: x for k, x in res.items() if k not in ("history", "columns")}))
     if a.out:
         with open(a.out, "w") as fh:

@@ -313,6 +313,7 @@ def gradients(x, rho, vg, A, kind, offsets, indices, Rp, s2, kcode, Lz, cond_max
         # smallest eigenvalue of the moment matrix (the identity under full support)
         lam = 0.5 * (m00 + m11 - math.sqrt((m00 - m11) ** 2 + 4.0 * m01 * m01))
         Bm[i, 3] = 1.0 if lam < lam_min else 0.0  # a fragment (see forces)
+        Bm[i, 4] = lam
         good = good and lam >= lam_min
         Bm[i, 0] = c00 if good else 1.0
         Bm[i, 1] = c01 if good else 0.0
@@ -475,6 +476,19 @@ class AxisymmetricFluid:
     sheet of the D/dx = 64 impact fell to 0.01 rho0 by the hoop term -rho v_r / r, with it
     rho_min stayed 0.988 rho0 to 0.7 t_c).
 
+    ``adaptive_h="mean-area"``: R_i = R sqrt(<A>_i / a_ref) from the number-weighted mean
+    area of the fluid around the ring (:func:`mean_area`, of the previous evaluation) in
+    place of its own area: a first-column ring carried out along the wall keeps the
+    support of its neighbours (its own area shrinks ~ r0 / r).
+    ``shifting`` (A > 0): particle shifting after each step (:meth:`_shift`).
+    ``wall_tension=False``: the walls' extrapolated pressure is clipped at 0 (the wall
+    pushes, never pulls: the lamella tip's tension is not copied onto the wall).
+    ``free_surface_no_tension``: rings at or next to the free surface are held at rho >=
+    rho0 (:meth:`_hold_surface_density`).
+    Measured with the three together (examples/axisymmetric/robustness_results.md): the
+    D/dx = 32, 10 m/s impact without surface tension keeps |p| < 0.5 rho V^2 to 2.7 t_c
+    (without them: spikes of 13-50 rho V^2 and a blow-up at 2.4 t_c).
+
     ``planar=True``: plain 2D SPH in the (x, y) = (r, z) plane with a symmetry plane at
     x = 0 (the same mirrors), ``M`` then the planar masses [kg/m]: no hoop terms, A = M / rho
     (for cross-checks against :class:`~sphfem.fluid.wcsph.FluidSolver` in 2D).
@@ -489,7 +503,7 @@ class AxisymmetricFluid:
                  smooth_hoop: bool = True, surface_tension: float = 0.0,
                  no_penetration: bool = False, renorm_lambda_min: float = 0.2,
                  fragment_incompressible: bool = False, shifting: float = 0.0,
-                 wall_tension: bool = True):
+                 wall_tension: bool = True, free_surface_no_tension: bool = False):
         self.x = np.array(x, dtype=np.float64)
         n = self.n = self.x.shape[0]
         self.v = np.array(v, dtype=np.float64).reshape(n, 2)
@@ -541,6 +555,8 @@ class AxisymmetricFluid:
             raise ValueError(f"shifting must be >= 0 (the coefficient A), got {shifting!r}")
         #: False: the walls' extrapolated pressure is clipped at 0 (no suction)
         self.wall_tension = bool(wall_tension)
+        #: True: rings at or next to the free surface (lambda < 0.75) keep rho >= rho0
+        self.free_surface_no_tension = bool(free_surface_no_tension)
         #: particle shifting coefficient A of dr = -A h |v| dt grad C (0: off)
         self.shifting = float(shifting)
         #: largest shift of the last step / h, and shifted steps
@@ -643,7 +659,7 @@ class AxisymmetricFluid:
         gr = np.zeros((m, 2))
         dvdr = np.zeros((m, 2))
         shep = np.zeros(m)
-        Bm = np.zeros((m, 4))
+        Bm = np.zeros((m, 5))
         qs = np.zeros(m)
         A[:n] = A0
         Rp = np.zeros(m)
@@ -689,6 +705,8 @@ class AxisymmetricFluid:
         #: sum_j A_j W_ij over all neighbours, self included (1 where the areas tile the
         #: plane; ~1/2 at a free surface)
         self.shepard = shep[:n].copy()
+        #: smallest eigenvalue of each row's moment matrix (1 inside, ~0.5 at a free surface)
+        self.lam = Bm[:n, 4].copy()
         self.wall_s["forces"] += time.perf_counter() - t1
 
     def _divergence_velocity(self, v, vg, kind, m):
@@ -741,10 +759,12 @@ class AxisymmetricFluid:
         self.x[fl] += 0.5 * dt * self.v[fl]
         self.v[fl] += 0.5 * dt * self.acc[fl]
         self.rho[fl] += 0.5 * dt * self.drho[fl]
+        self._hold_surface_density()
         self._reflect()
         self.evaluate()
         self.v[fl] = v_n + dt * self.acc[fl]
         self.rho[fl] = rho_n + dt * self.drho[fl]
+        self._hold_surface_density()
         self.x[fl] += 0.5 * dt * self.v[fl]
         if self.shifting > 0.0:
             self._shift(dt)
@@ -754,6 +774,17 @@ class AxisymmetricFluid:
         if not np.isfinite(self.x[fl]).all() or not np.isfinite(self.rho[fl]).all():
             raise FloatingPointError(f"axisymmetric fluid: non-finite state at step "
                                      f"{self.step_count}, t = {self.t:.4g} s")
+
+    def _hold_surface_density(self) -> None:
+        """``free_surface_no_tension``: a free surface is at the ambient pressure (the capillary
+        jump is the surface-tension force's), so the rings at or next to it (lambda_i <
+        0.75 at the last evaluation, Marrone et al. 2010) are held at rho >= rho0: they push
+        when compressed and never pull.  Inside the fluid tension is left to the equation
+        of state.  Without it a surface ring whose divergence is misjudged on its one-sided
+        support drifts below rho0 and its tension pulls its neighbours out of the surface."""
+        if self.free_surface_no_tension and hasattr(self, "lam"):
+            s = self.fluid & (self.lam < 0.75) & (self.rho < self.params.rho0)
+            self.rho[s] = self.params.rho0
 
     def _shift(self, dt: float) -> None:
         """Particle shifting (Skillen et al. 2013, Lind et al. 2012, with the free-surface
