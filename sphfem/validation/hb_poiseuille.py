@@ -118,14 +118,14 @@ def variant(tau0_over_tw: float, n: float, gd0_ratio: float, reg: str = "cutoff"
 
 
 def run_hb_channel(n_across: int, rheo: dict, t_end_over_tv: float = 4.0,
-                   tol: float = 2e-4, start: str = "rest"):
+                   tol: float = 2e-4, start: str = "rest", c0_factor: float = 20.0):
     """Channel run with ``n_across`` particles across H; stops at steady state or at
     ``t_end_over_tv`` T_v (T_v = rho (H/2)^2 / mu_w, mu_w the exact wall viscosity).  Steady:
     the relative L2 change of the (sorted) fluid velocities over the last 0.5 T_v is below
     ``tol`` (the slowest mode decays as ~exp(-t/T_v) or faster, so about 1.6 ``tol`` of u
     remains to go; chunk-to-chunk changes are not used: layers sliding past each other
     in the periodic channel leave a non-decaying ~1e-4 jitter).  ``start``: "rest" or
-    "exact" (the regularised exact profile).
+    "exact" (the regularised exact profile); c0 = ``c0_factor`` u_max.
     Returns (y, u, gamma_dot, mu of the fluid particles, solver, info)."""
     tau0, k, n, gd0 = rheo["tau0"], rheo["k"], rheo["n"], rheo["gamma_dot_0"]
     pap = rheo["regularisation"] == "papanastasiou"
@@ -143,7 +143,7 @@ def run_hb_channel(n_across: int, rheo: dict, t_end_over_tv: float = 4.0,
         kw["n"] = n
     if rheology != "power-law":
         kw["tau0"] = tau0
-    par = FluidParams(rho0=RHO0, c0=20.0 * u_ex, mu=0.0, gravity=(G / RHO0, 0.0),
+    par = FluidParams(rho0=RHO0, c0=c0_factor * u_ex, mu=0.0, gravity=(G / RHO0, 0.0),
                       delta=0.1, rheology=rheology, **kw)
     s = FluidSolver(ps, SUPPORT * dx, lo, hi, period=period, params=par)
     mu_w = (G * H / 2) / GD_WALL
