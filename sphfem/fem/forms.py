@@ -132,12 +132,15 @@ def thermo_elastic_stress(lam: float, mu: float, alpha: float, grad_u, dT, plane
     eps = sym_grad_array(grad_u)
     beta = thermal_modulus(lam, mu) * alpha
     tr = trace(eps)
-    s2 = 2.0 * mu * eps + eye(lam * tr - beta * np.asarray(dT), dim)
+    iso = lam * tr - beta * np.asarray(dT)
+    s2 = 2.0 * mu * eps
+    for i in range(dim):  # + iso I, without an identity-tensor temporary
+        s2[i, i] += iso
     if dim == 3:
         return s2
     out = np.zeros((3, 3) + s2.shape[2:])
     out[:2, :2] = s2
-    out[2, 2] = lam * tr - beta * np.asarray(dT)
+    out[2, 2] = iso
     return out
 
 
