@@ -47,6 +47,7 @@ wall terms.  Iterations, final density and divergence errors per step are in
 from __future__ import annotations
 
 import logging
+import time
 
 from numba import njit, prange
 
@@ -133,6 +134,14 @@ def warm_start(solver, state: ProjectionState, w, dt: float) -> None:
 
 
 def _solve(solver, dt: float, state):
+    t0 = time.perf_counter()
+    st = _solve_timed(solver, dt, state)
+    solver.wall["pressure_solve"] = solver.wall.get("pressure_solve", 0.0) + (
+        time.perf_counter() - t0)
+    return st
+
+
+def _solve_timed(solver, dt: float, state):
     pa = solver.params
     st = state if state is not None else ProjectionState(tolerance=pa.dfsph_tolerance)
     w = projection.prepare(solver, st)

@@ -31,6 +31,7 @@ error per step are in ``diagnostics()["pressure_solve"]``.
 from __future__ import annotations
 
 import logging
+import time
 
 from numba import njit, prange
 
@@ -89,6 +90,14 @@ def relaxed_jacobi(p, rho_pred, rho, A, kind, rho0, dt, omega):
 
 
 def _solve(solver, dt: float, state):
+    t0 = time.perf_counter()
+    st = _solve_timed(solver, dt, state)
+    solver.wall["pressure_solve"] = solver.wall.get("pressure_solve", 0.0) + (
+        time.perf_counter() - t0)
+    return st
+
+
+def _solve_timed(solver, dt: float, state):
     pa = solver.params
     st = state if state is not None else ProjectionState(tolerance=pa.iisph_tolerance)
     w = projection.prepare(solver, st)
