@@ -3,8 +3,8 @@
 Cohesion + curvature of Akinci, Akinci & Teschner (2013, ACM TOG 32(6) 182) between fluid
 particles, and their adhesion to wall particles:
 
-    a_i = sum_j K_ij [ gamma m_j C(d) r/d  -  gamma_k (n_i - n_j) ]        (fluid j)
-        + sum_b [ gamma_a rho0 V_b C(d) r/d  -  psi gamma_k (n_i - n_b) ]   (wall b)
+    a_i = sum_j K_ij [ gamma m_j C(d) r/d  -  gamma_k V_j W_ij (n_i - n_j) ]        (fluid j)
+        + sum_b [ gamma_a rho0 V_b C(d) r/d  -  psi gamma_k V_b W_ib (n_i - n_b) ]   (wall b)
 
     K_ij = 2 rho0 / (rho_i + rho_j),
     n_i = R (sum_fluid V_j grad_i W_ij + psi sum_wall V_b grad_i W_ib),
@@ -17,15 +17,20 @@ paper's).
 
 Calibration.  The paper's curvature force gamma m_i (n_i - n_j) is not dimensionally
 consistent with its cohesion gamma m_i m_j C (their ratio depends on the unit system), so
-the two get separate constants, each fixed by the mechanical tension of a flat interface,
-sigma = int (P_N - P_T) dz with the pair virial (Kirkwood-Buff), evaluated as lattice sums
-at the run's R / dx on a hexagonal (2D) / cubic (3D) lattice (:func:`lattice_sums`; the
-continuum half-space integral AKINCI_C is their limit, 6 % (2D) / 14 % (3D) below the
-cohesion's sum at R = 3 dx).  The curvature forces are normal to a flat
-interface; they count through the EOS pressure that balances them (the surface layer is
-stretched: positive tension).  ``akinci_curvature`` = phi is the share of sigma carried by
-the curvature term: gamma for (1 - phi) sigma, gamma_k [m/s^2] for phi sigma
-(:func:`akinci_constants`).
+the two get separate constants.  The paper sums the normal differences over the neighbours
+with equal weight; here each pair is weighted by V_j W_ij (the SPH mean of the neighbours'
+normals): with equal weights the tension of the term depends on the particle arrangement
+(flat-interface sums, R = 3 dx: 3.21 on the hexagonal and 2.36 on the square lattice, and a
+2D droplet period of 1.07 or 0.89 T_Rayleigh depending on which one calibrates it), with
+the kernel weight it does not (0.0392 vs 0.0393).  Both constants are fixed by the
+mechanical tension of a flat interface, sigma = int (P_N - P_T) dz with the pair virial
+(Kirkwood-Buff), evaluated as lattice sums at the run's R / dx on a hexagonal (2D) / cubic
+(3D) lattice (:func:`lattice_sums`; the continuum half-space integral AKINCI_C is their
+limit, 6 % (2D) / 14 % (3D) below the cohesion's sum at R = 3 dx).  The curvature forces
+are normal to a flat interface; they count through the EOS pressure that balances them
+(the surface layer is stretched: positive tension).  ``akinci_curvature`` = phi is the
+share of sigma carried by the curvature term: gamma for (1 - phi) sigma, gamma_k [m/s^2]
+for phi sigma (:func:`akinci_constants`).
 
 Why the former version blew up (2D droplet: speed guard at step 2): gamma_k was gamma
 m_bar / R^dim, i.e. the curvature term carried ~70 sigma of tension (20 times the cohesion's
@@ -41,10 +46,10 @@ equilibrium; square-lattice constants, c0 from the cohesion's pressure): the l =
 phi = 0.9 it is 0.94 at R_drop = 10 dx but 0.83 at 20 dx (the cohesion's share of the
 stiffness grows with R_drop / R).  The curvature term depends
 on the particles only through the colour gradient, which vanishes in the bulk, so it adds
-no bulk stiffness: with phi = 1 the period is resolution-independent, 1.072 / 1.073
-T_Rayleigh at R_drop = 10 / 20 dx (hexagonal calibration; 0.897 / 0.888 with the square
-one): the tension of this particle model depends on the particle arrangement by
-~+-15 %, which the lattice calibration cannot remove; the 5 % goal is not met.
+no bulk stiffness: with phi = 1 (and the kernel weights) the period is 0.967 / 1.002 /
+1.016 T_Rayleigh at R_drop = 10 / 20 / 20 dx (1.3 / 1.3 / 2.2 periods run).  Its surface
+stays smooth at R_drop = 10 dx (ripple < 0.01 dx); at 20 dx it roughens from 0.006 dx to
+~0.10 dx within 1.2 periods and stays there (to 2.2 periods).
 
 Wetting (Akinci's adhesion replaced by a construction with a Young relation for both terms):
 the wall carries the colour psi = (1 + cos theta) / 2, theta = ``akinci_contact_angle``
@@ -82,7 +87,7 @@ from numba import njit, prange
 from sphfem.fluid.passes import grad_factor
 from sphfem.fluid.surface import color_gradient
 from sphfem.fluid.surface_tension import SurfaceTensionMethod, register
-from sphfem.kernels import FASTMATH
+from sphfem.kernels import FASTMATH, kernel_f
 from sphfem.neighbors import build_neighbor_list
 from sphfem.particles import FLUID, WALL
 from sphfem.schema import Param
@@ -123,11 +128,11 @@ def lattice_tensions(dim: int, R_over_dx: float) -> tuple[float, float]:
     return lattice_sums(dim, R_over_dx)[:2]
 
 
-def _slab(dim: int, R: float):
+def _slab(dim: int, R: float, square: bool = False):
     """A slab of particles at unit number density, ``layers`` rows along the last axis,
     periodic sideways (period >= 2 R + one spacing): 2D hexagonal (rows along x), 3D simple
     cubic.  Returns (positions, row index, lateral periods)."""
-    if dim == 2:
+    if dim == 2 and not square:
         a = math.sqrt(2.0 / math.sqrt(3.0))  # unit density: a^2 sqrt(3)/2 = 1
         dy = a * math.sqrt(3.0) / 2.0
         ncol = int(math.ceil((2 * R + a) / a))
@@ -137,35 +142,33 @@ def _slab(dim: int, R: float):
         return np.array(xs), row, np.array([ncol * a])
     ncol = int(math.ceil(2 * R + 1))
     rows = int(math.ceil(4 * R))
-    g = np.meshgrid(np.arange(ncol), np.arange(ncol), np.arange(rows), indexing="ij")
+    g = np.meshgrid(*([np.arange(ncol)] * (dim - 1)), np.arange(rows), indexing="ij")
     x = np.stack([v.ravel() for v in g], 1).astype(float)
-    return x, x[:, 2].astype(int), np.array([float(ncol), float(ncol)])
+    return x, x[:, -1].astype(int), np.full(dim - 1, float(ncol))
 
 
 @lru_cache(maxsize=32)
-def lattice_sums(dim: int, R_over_dx: float) -> tuple[float, float, float]:
+def lattice_sums(dim: int, R_over_dx: float, square: bool = False) -> tuple[float, float, float]:
     """(S_c, S_k, P_k): tension of a flat interface per unit gamma rho0^2 R^2 (cohesion) and
     per unit gamma_k rho0 R^2 (curvature term), and the largest normal stress of the
     curvature forces per unit gamma_k rho0 R, from pair sums over a slab (4 R thick,
     periodic sideways) of a hexagonal (2D) / simple cubic (3D) lattice of number density
-    1/dx^dim, normals from the Wendland C2 kernel.  The hexagonal lattice is what the
-    surface of a relaxed 2D particle set (and the staggered ring packing of the droplets)
-    resembles; the represented sigma depends on the arrangement: on the square lattice
-    (2D, R = 3 dx) S_k is 2.36 instead of 3.21 and S_c 0.00431 instead of 0.00415, and a
-    2D droplet calibrated on the square lattice had a 27 % too large Laplace pressure.
+    1/dx^dim, normals and pair weights V_j W_ij from the Wendland C2 kernel.  The cohesion's
+    sum depends on the lattice by ~4 % (2D square: 0.00431, hexagonal: 0.00415 at R = 3 dx),
+    the weighted curvature sum by 0.3 % (``square``: the square lattice in 2D).
 
     Mechanical tension of the slab's two faces: 2 sigma A = int (P_N - P_T) dz A with the
     pair virial (Irving-Kirkwood), r = x_j - x_i, over ordered pairs (i, j):
 
         4 sigma_c A = sum gamma m^2 C(|r|) (r_x^2 - r_n^2) / |r|
-        4 sigma_k A = sum m gamma_k r_n (n_i - n_j)_n        (paper's sign)
+        4 sigma_k A = sum m gamma_k V_j W_ij r_n (n_i - n_j)_n        (paper's sign)
 
     (in equilibrium the EOS pressure cancels the normal stress, so the curvature term,
     whose forces are normal to the slab, counts through its normal stress alone).  P_k:
     the normal force per area of each row accumulated from the face.
     """
     R = R_over_dx
-    x, row, per = _slab(dim, R)
+    x, row, per = _slab(dim, R, square)
     d = x[None, :, :] - x[:, None, :]  # r = x_j - x_i
     for k in range(dim - 1):  # minimum image sideways
         d[..., k] -= per[k] * np.round(d[..., k] / per[k])
@@ -175,13 +178,15 @@ def lattice_sums(dim: int, R_over_dx: float) -> tuple[float, float, float]:
     q = np.where(m, dist / R, 1.0)
     F = np.where(m, -_wendland_dwdq(q, dim) / R**dim / R / dd, 0.0)
     nrm = R * np.einsum("ij,ij->i", F, d[..., -1])  # normal component (V = 1)
+    c_w = 7.0 / math.pi if dim == 2 else 21.0 / (2.0 * math.pi)
+    Wk = np.where(m, c_w / R**dim * (1.0 - q) ** 4 * (1.0 + 4.0 * q), 0.0)  # V_j W_ij
     C = np.where(m, _akinci_c(q) / R**dim, 0.0)
     A = float(np.prod(per))
     rn = d[..., -1]
     S_c = float(np.sum(C * (d[..., 0] ** 2 - rn**2) / dd)) / (4 * A * R * R)
-    dn = nrm[:, None] - nrm[None, :]
-    S_k = float(np.sum(np.where(m, rn * dn, 0.0))) / (4 * A * R * R)
-    fy = -np.where(m, dn, 0.0).sum(1)  # paper's sign, per particle (m = 1)
+    dn = Wk * (nrm[:, None] - nrm[None, :])
+    S_k = float(np.sum(rn * dn)) / (4 * A * R * R)
+    fy = -dn.sum(1)  # paper's sign, per particle (m = 1)
     rows = row.max() + 1
     per_row = np.bincount(row, weights=fy, minlength=rows) / A
     P_k = float(np.abs(np.cumsum(per_row[: rows // 2])).max())
@@ -244,8 +249,8 @@ def _akinci_shape(q):
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
-def akinci_accel(x, m, V, rho, kind, offsets, indices, R, gamma, gamma_k, gamma_a, psi, rho0,
-                 period, nrm, acc):
+def akinci_accel(x, m, V, rho, kind, offsets, indices, R, sigma, kernel_code, gamma, gamma_k,
+                 gamma_a, psi, rho0, period, nrm, acc):
     """acc[i] += Akinci cohesion + curvature (fluid j) + adhesion (wall j) on fluid rows;
     ``nrm`` = R grad C over fluid neighbours (into the liquid), ``gamma_k`` [m/s^2],
     ``gamma_a`` in the units of ``gamma``."""
@@ -275,11 +280,12 @@ def akinci_accel(x, m, V, rho, kind, offsets, indices, R, gamma, gamma_k, gamma_
             if d2 >= R2 or d2 == 0.0:
                 continue
             d = np.sqrt(d2)
+            wk = V[j] * sigma * kernel_f(d / R, kernel_code)  # kernel weight of the pair
             if fluid:
                 K = 2.0 * rho0 / (ri + rho[j])
                 # cohesion: -gamma m_j C (x_i - x_j)/d = +gamma m_j C r/d
                 fc = K * gamma * m[j] * _akinci_shape(d / R) / (Rd * d)
-                fk = -K * gamma_k  # the paper's sign: adds tension (module doc)
+                fk = -K * gamma_k * wk  # the paper's sign: adds tension (module doc)
                 a0 += fc * r0 + fk * (ni0 - nrm[j, 0])
                 if dim > 1:
                     a1 += fc * r1 + fk * (ni1 - nrm[j, 1])
@@ -287,7 +293,7 @@ def akinci_accel(x, m, V, rho, kind, offsets, indices, R, gamma, gamma_k, gamma_
                     a2 += fc * r2 + fk * (ni2 - nrm[j, 2])
             else:  # wall of colour psi: adhesion (rest mass rho0 V_b) and curvature pair
                 fa = gamma_a * rho0 * V[j] * _akinci_shape(d / R) / (Rd * d)
-                fw = -psi * gamma_k
+                fw = -psi * gamma_k * wk
                 a0 += fa * r0 + fw * (ni0 - nrm[j, 0])
                 if dim > 1:
                     a1 += fa * r1 + fw * (ni1 - nrm[j, 1])
@@ -417,8 +423,9 @@ def _accelerate(solver, state):
         wall = p.kind == WALL
         state.nrm[wall] = state.gall[wall] + psi * _wall_wall_gradient(solver, state)[wall]
     state.nrm *= R
-    akinci_accel(p.x, p.m, s.V, p.rho, p.kind, nl.offsets, nl.indices, R, gamma, gamma_k,
-                 gamma_a, psi, pa.rho0, solver.period, state.nrm, p.acc)
+    akinci_accel(p.x, p.m, s.V, p.rho, p.kind, nl.offsets, nl.indices, R, solver.sigma,
+                 solver.kernel_code, gamma, gamma_k, gamma_a, psi, pa.rho0, solver.period,
+                 state.nrm, p.acc)
     return state
 
 
