@@ -67,8 +67,8 @@ alone would push it only along the wall normal, and the contact line would not m
 wall's repulsion is the wall model's pressure (Adami et al. 2012); the wall pairs of this
 pass are not added to the walls' ``f_fluid``.  Measured (sessile drop,
 :mod:`sphfem.validation.sessile_drop`): the contact line stays pinned near its start on the
-no-slip particle wall, so the prescribed angle is not reached (60 / 120 deg gave 86 / 96
-deg at R0/dx = 15); the angle follows from theta only through this relation.
+no-slip particle wall, so the prescribed angle is not reached (60 / 120 deg gave 100 / 101
+deg at R0/dx = 10); the angle follows from theta only through this relation.
 
 Time step: the capillary limit of :meth:`FluidSolver.dt_limits` with the sigma the
 constants represent; weakly compressible runs need rho0 c0^2 >> the largest pressure,

@@ -16,10 +16,12 @@ Status (issue 17): NOT registered with ``sphfem validate`` (the module is not in
 ``sphfem.validation._CASE_MODULES``) because it does not pass.  The model's relation is
 cos theta = 2 psi - 1 with the wall colour psi = (1 + cos theta) / 2 (derived in
 :mod:`sphfem.fluid.surface_tension_akinci2013`), but the measured contact line barely moves
-from the start (a half disc, 90 deg) on the no-slip Adami wall: prescribed 60 / 120 deg
-gave 78 / 112 deg at R0/dx = 10 after 6 capillary times and 86 / 96 deg at R0/dx = 15
-after 12 (the drop stays a half disc, base unchanged); with kinetic damping or without
-viscosity the R0/dx = 10 drop stayed at 89-99 deg.  Before the wall particles took part
+from the start (a half disc, 90 deg) on the no-slip Adami wall: with the final model
+(kernel-weighted curvature pairs) prescribed 60 / 120 deg gave 100 / 101 deg at R0/dx = 10
+after 6 capillary times (82-100 / 96-106 deg over the last 3); with the paper's equal
+weights 78 / 112 deg at R0/dx = 10 and 86 / 96 deg at R0/dx = 15 after 12 capillary times
+(the drop stays a half disc, base unchanged); with kinetic damping or without viscosity
+the R0/dx = 10 drop stayed at 89-99 deg.  Before the wall particles took part
 in the curvature pairs, a flat wall could push fluid particles only along its normal and
 nothing moved; with the adhesion pair force alone (no cohesion) a one-particle film spread
 along the wall and the drop beaded up on it.  Run it with
