@@ -29,8 +29,11 @@ the paper's unrelaxed increments diverged on the R = 3 dx Wendland stencil (2D c
 rest, blow-up within 5 steps), and with increments clamped at zero instead of the total, an
 overshoot could never be taken back (a column at rest sagged at 0.6 m/s); (2) warm start of
 the density solve with half the last step's kappa (kept under the particles' ids; the
-full kappa kept the solver's checkerboard errors: max speed 0.7 m/s in the same column),
-only where the predicted density exceeds rho0; the divergence solve starts from zero.  A
+full kappa kept the solver's checkerboard errors: max speed 0.7 m/s in the same column;
+the first step takes the set-up's p, e.g. hydrostatic, in full), on every fluid particle
+(limited to the particles predicted to be compressed, as in SPlisHSPlasH, the a/80 dam
+break's first steps needed 90-100 iterations instead of 2); the divergence solve starts
+from zero.  A
 shortened step carries only (dt / dt_prev)^2 of the density error
 (:func:`sphfem.fluid.projection.carried_weight`).
 
@@ -49,6 +52,7 @@ from __future__ import annotations
 import logging
 import time
 
+import numpy as np
 from numba import njit, prange
 
 from sphfem.fluid import projection
@@ -118,16 +122,17 @@ def jacobi(solver, w, dt: float, density: bool, tol: float, min_it: int, max_it:
 
 
 def warm_start(solver, state: ProjectionState, w, dt: float) -> None:
-    """Apply WARM_FRACTION of the last step's kappa to the particles predicted to be
-    compressed (v* -> v* + dt a(q_warm)); q_warm goes into ``w.Q``."""
-    p, nl, rho0 = solver.p, solver.nbrs, solver.params.rho0
+    """Apply WARM_FRACTION of the last step's kappa (the first step: kappa = p / rho of the
+    set-up's p, in full) to the fluid particles (v* -> v* + dt a(q_warm)); q_warm goes into
+    ``w.Q``."""
+    p, nl = solver.p, solver.nbrs
     pairs = (w.M, p.kind, nl.offsets, w.nbj, w.grad, w.cnt)
     fl = p.kind == FLUID
-    density_rate(p.v, *pairs, w.rate)
-    kappa = state.warm.get(p.id)
-    on = fl & (w.rho + dt * w.rate > rho0) & (w.rho > 0)
+    first = not state.log.iterations  # the set-up's p (e.g. hydrostatic) in full
+    kappa = p.p / np.where(w.rho > 0, w.rho, 1.0) if first else state.warm.get(p.id)
+    on = fl & (w.rho > 0)
     w.Q[:] = 0.0
-    w.Q[on] = WARM_FRACTION * kappa[on] / w.rho[on]
+    w.Q[on] = (1.0 if first else WARM_FRACTION) * kappa[on] / w.rho[on]
     if on.any():
         wall_extrapolate(w.Q, p.kind, nl.offsets, w.nbj, w.wgt, w.cnt)
         pressure_acceleration(w.Q, *pairs, dt, p.v, True)

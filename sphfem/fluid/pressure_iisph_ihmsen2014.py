@@ -17,8 +17,8 @@ mirroring p_i), solved by relaxed Jacobi iterations with the pressure clamped at
 
 with omega = ``iisph_omega`` (0.5 in the paper; capped by
 :func:`sphfem.fluid.projection.relaxation` where it would diverge: 0.27 in 3D), warm
-start p^0 = p(t - dt) / 2, until the mean predicted density error
-max(rho^adv_i + (A p)_i - rho0, 0) / rho0 over the fluid particles is within
+start p^0 = p(t - dt) / 2 (the first step: the set-up's p in full), until the mean
+predicted density error max(rho^adv_i + (A p)_i - rho0, 0) / rho0 over the fluid particles is within
 ``iisph_tolerance`` (per cent; at least two iterations).  Then v^{n+1} = v* + dt a_i(p).
 The A p product is two gathers: a_i(p) over the pairs, then its density rate.  A shortened
 step carries only (dt / dt_prev)^2 of the last density error
@@ -112,7 +112,8 @@ def _solve_timed(solver, dt: float, state):
     rho_adv[:] = rho0 + beta * (w.rho - rho0) + dt * w.rate
     P = w.Q  # the pressure being solved for (warm start from the last step's)
     P[:] = 0.0
-    P[fl] = WARM_FRACTION * p.p[fl].clip(min=0.0)
+    first = not st.log.iterations  # the set-up's p (e.g. hydrostatic) in full
+    P[fl] = (1.0 if first else WARM_FRACTION) * p.p[fl].clip(min=0.0)
     tol = 0.01 * pa.iisph_tolerance
     omega = projection.relaxation(st, pa.iisph_omega)
     it = 0

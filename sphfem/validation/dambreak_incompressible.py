@@ -46,8 +46,9 @@ def run_dambreak_projection(n_width: int, pressure: str, T_end: float = 3.2,
                             a: float = 0.146, g: float = 9.81, rho0: float = 1000.0,
                             alpha: float = 0.02, **keys):
     """Column a x 2a of the ``dambreak`` case with the projection method ``pressure``
-    (``keys``: its own [fluid] keys); starts at rest from the lattice at rho0; returns
-    (T, Z, solver)."""
+    (``keys``: its own [fluid] keys); starts at rest from the lattice at rho0 with the
+    hydrostatic pressure rho0 g (2a - y) (the first solve's initial guess; the WCSPH case
+    starts from the hydrostatic density); returns (T, Z, solver)."""
     dx = a / n_width
     xf = lattice([0.0, 0.0], [a, 2 * a], dx)
     xw = box_walls([0.0, 0.0], [4 * a, 3 * a], dx, LAYERS)
@@ -56,6 +57,8 @@ def run_dambreak_projection(n_width: int, pressure: str, T_end: float = 3.2,
                       alpha=alpha, pressure=pressure, **keys)
     m = (LAYERS + 1) * dx
     s = FluidSolver(ps, SUPPORT * dx, [-m, -m], [4 * a + m, 3 * a + m], params=par)
+    fl = s.p.kind == FLUID
+    s.p.p[fl] = rho0 * g * (2 * a - s.p.x[fl, 1])  # hydrostatic: the first solve's start
     scale = math.sqrt(2 * g / a)
     T, Z = [0.0], [1.0]
 
