@@ -2,7 +2,7 @@
 
 The stiffness of :func:`sphfem.fem.forms.elasticity`, written per pair of scalar basis
 functions (a, b) and displacement components (c, d) (Zienkiewicz & Taylor, *The Finite
-Element Method*, vol. 1, ch. 6: the element matrix K_ab = int B_a^T D B_b dx)::
+Element Method*, vol. 1: the element matrix K_ab = int B_a^T D B_b dx)::
 
     K[(a, c), (b, d)] = sum_q w_q [ lam g_a[c] g_b[d] + mu g_a[d] g_b[c] + mu delta_cd g_a . g_b ]
 

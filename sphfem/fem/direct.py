@@ -4,8 +4,8 @@ K_II is symmetric positive definite.  In 3D its Cholesky factor is dense-ish wha
 ordering (nested dissection gives O(n^2) flops for n unknowns: about 1.7e11 for the
 1e5-unknown P1 substrate), so the time goes into dense kernels on the separators and a
 supernodal/multifrontal factorisation with BLAS-3 is what makes it fast (Davis, Rajamanickam
-& Sid-Lakhdar, "A survey of direct methods for sparse linear systems", Acta Numerica 2016,
-secs. 8-11).  Backends, ``direct_backend``:
+& Sid-Lakhdar, "A survey of direct methods for sparse linear systems", Acta Numerica 25,
+2016).  Backends, ``direct_backend``:
 
 * ``"pardiso"`` -- Intel MKL PARDISO (supernodal, threaded, METIS ordering) through pypardiso
   (optional: ``pip install pypardiso``, which brings MKL).  The upper triangle is passed
