@@ -503,7 +503,8 @@ class AxisymmetricFluid:
                  smooth_hoop: bool = True, surface_tension: float = 0.0,
                  no_penetration: bool = False, renorm_lambda_min: float = 0.2,
                  fragment_incompressible: bool = False, shifting: float = 0.0,
-                 wall_tension: bool = True, free_surface_no_tension: bool = False):
+                 wall_tension: bool = True, free_surface_no_tension: bool = False,
+                 shift_surface: bool = True):
         self.x = np.array(x, dtype=np.float64)
         n = self.n = self.x.shape[0]
         self.v = np.array(v, dtype=np.float64).reshape(n, 2)
@@ -559,7 +560,10 @@ class AxisymmetricFluid:
         self.free_surface_no_tension = bool(free_surface_no_tension)
         #: particle shifting coefficient A of dr = -A h |v| dt grad C (0: off)
         self.shifting = float(shifting)
-        #: largest shift of the last step / h, and shifted steps
+        #: True: surface rings shifted along the surface ("all"); False: not at all
+        #: ("interior"), as ``[fluid] shifting`` of the planar solver
+        self.shift_surface = bool(shift_surface)
+        #: largest shift of the last step / h
         self.last_shift = 0.0
         self.csf = (AxisymmetricCSF(surface_tension, self.kcode, hoop=not self.planar)
                     if surface_tension > 0.0 else None)
@@ -813,7 +817,7 @@ class AxisymmetricFluid:
         kind = np.where(near[:n] == 2, WALL, self.kind).astype(np.int8)  # fragments: none
         out = np.zeros(n)
         shift(self.x, self.v, self.rho, kind, gc, nrm[:n], near[:n] == 1, a["grad_rho"][:n],
-              self.shifting * float(h.max()), dt, 0.1 * float(h.min()), True, out)
+              self.shifting * float(h.max()), dt, 0.1 * float(h.min()), self.shift_surface, out)
         self.last_shift = float(out.max() / h.min())
 
     def _reflect(self) -> None:
