@@ -41,8 +41,8 @@ Order within the shared step (:func:`sphfem.fluid.pressure.projection_advance`):
 paper's divergence solve of the end of step n runs at the start of step n+1, at the same
 positions x^n and with the same rho and A as the density solve (computed once), so the
 non-pressure forces of step n+1 see the velocities before it.  ``p`` of a fluid particle
-is rho_i^2 times the step's total q (both solves), the wall particles' ``p`` is
-extrapolated for output, and their ``f_fluid`` gets the exact reaction of the solves'
+is rho_i^2 times the step's total q (both solves), the wall particles' ``p`` is the
+one the solve gave them, and their ``f_fluid`` gets the exact reaction of the solves'
 wall terms.  Iterations, final density and divergence errors per step are in
 ``diagnostics()["pressure_solve"]``.
 """
@@ -166,7 +166,7 @@ def _solve_timed(solver, dt: float, state):
     st.warm.put(p.id[fl], (w.rho * w.Q)[fl])  # kappa of the density solve
     q = w.Q + w.Qv
     p.p[fl] = (w.rho * w.rho * q)[fl]
-    projection.finish(solver, st, q, g)
+    projection.finish(solver, st, q)
     log = st.log
     log.iterations.append(it)
     log.divergence_iterations.append(itv)

@@ -130,7 +130,7 @@ def _solve_timed(solver, dt: float, state):
         it += 1
     p.v[fl] += dt * w.acc_p[fl]
     p.p[fl] = P[fl]
-    projection.finish(solver, st, w.q, g)
+    projection.finish(solver, st, w.q)
     log = st.log
     log.iterations.append(it)
     log.density_error.append(err)

@@ -283,34 +283,6 @@ def wall_reaction(q, m, M, kind, offsets, nbj, grad, cnt, f):
                 f[b, c] += s * grad[o + k, c]
 
 
-@njit(cache=True, parallel=True, fastmath=FASTMATH)
-def wall_pressure(x, p, rho, acc, kind, offsets, nbj, cnt, R, kernel_code, period, gravity):
-    """p of wall particles for output (the solvers mirror p_i instead): the fluid pressure
-    extrapolated with the hydrostatic term of Adami et al. (2012, eq. 27),
-    p_b = [sum_f p_f W_bf + (g - a_b) . sum_f rho_f (x_b - x_f) W_bf] / sum_f W_bf."""
-    n, dim = x.shape
-    periodic = False
-    for k in range(dim):
-        periodic |= period[k] > 0.0
-    for b in prange(n):
-        if kind[b] != WALL:
-            continue
-        o = offsets[b]
-        sw = 0.0
-        sp = 0.0
-        for k in range(cnt[b]):
-            f = nbj[o + k]
-            r0, r1, r2 = pair_sep(x, f, b, dim, period, periodic)  # x_b - x_f
-            w = kernel_f(np.sqrt(r0 * r0 + r1 * r1 + r2 * r2) / R, kernel_code)
-            rr = (r0, r1, r2)
-            hyd = 0.0
-            for c in range(dim):
-                hyd += (gravity[c] - acc[b, c]) * rr[c]
-            sw += w
-            sp += (p[f] + rho[f] * hyd) * w
-        p[b] = sp / sw if sw > 0.0 else 0.0
-
-
 def lattice_sum(kernel_code: int, dim: int, R_over_dx: float) -> float:
     """S = sum_k dx^d W(|k| dx) over a Cartesian lattice of spacing dx (k in Z^d): the
     discrete kernel sum of a particle inside a lattice (1.0051 in 2D, 1.0031 in 3D for the
@@ -509,16 +481,15 @@ def add_wall_hydrostatic(solver, w: Work, dt: float, g: np.ndarray) -> None:
     pressure_acceleration(w.qh, w.M, p.kind, nl.offsets, w.nbj, w.grad, w.cnt, dt, p.v, True)
 
 
-def finish(solver, state: ProjectionState, q: np.ndarray, g: np.ndarray) -> None:
+def finish(solver, state: ProjectionState, q: np.ndarray) -> None:
     """After a solve with the step's total q = p / rho^2 (fluid rows): the wall particles'
-    output pressure and the pressure reaction on them (q_b extrapolated plus the
-    hydrostatic ``w.qh``), kept under their ids for :func:`add_reaction`."""
+    q_b (extrapolated plus the hydrostatic ``w.qh``), their ``p`` = rho0^2 q_b and the
+    pressure reaction on them, kept under their ids for :func:`add_reaction`."""
     p, nl, w = solver.p, solver.nbrs, state.work
-    wall_pressure(p.x, p.p, p.rho, p.acc, p.kind, nl.offsets, w.nbj, w.cnt, solver.R,
-                  solver.kernel_code, solver.period, g)
     wall_extrapolate(q, p.kind, nl.offsets, w.nbj, w.wgt, w.cnt)
     wall = p.kind == WALL
     q[wall] += w.qh[wall]
+    p.p[wall] = solver.params.rho0 ** 2 * q[wall]  # the pressure the solve gave the walls
     f = w.f
     wall_reaction(q, p.m, w.M, p.kind, nl.offsets, w.nbj, w.grad, w.cnt, f)
     state.reaction_ids = p.id[wall].copy()
