@@ -219,6 +219,9 @@ class AxisymmetricFluidModule(PhysicsModule):
 
         super().__init__(scene)
         self.params = params_from_scene(scene)
+        if self.params.pressure != "wcsph":
+            raise ValueError(f'fluid: pressure = "{self.params.pressure}" is not available '
+                             'with geometry = "axisymmetric" (only "wcsph")')
         if self.params.surface_tension not in ("none", "csf"):
             raise ValueError(f'fluid: surface_tension = "{self.params.surface_tension}" is '
                              'not available with geometry = "axisymmetric"; set "csf" (with the '

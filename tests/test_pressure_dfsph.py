@@ -142,3 +142,17 @@ def test_hot_block_with_heat_and_dfsph(tmp_path):
     assert abs(summary["diagnostics"]["heat"]["energy_drift_rel"]) < 1e-12
     weight = ps.m[fl].sum() * 9.81
     assert -ps.f_fluid[ps.kind == WALL].sum(0)[1] > 0.3 * weight  # landed: the floor pushes
+
+
+@pytest.mark.parametrize("method", ["iisph", "dfsph"])
+def test_axisymmetric_fluid_refuses_a_projection_method(method):
+    """The (r, z) fluid has only the weakly compressible model: a projection method there
+    is refused by name (it was silently run as wcsph)."""
+    from test_scene_axisymmetric import droplet_scene
+
+    from sphfem.scene import SceneError, parse_scene
+
+    bad = droplet_scene()
+    bad["fluid"]["pressure"] = method
+    with pytest.raises((SceneError, ValueError), match=f'pressure = "{method}"'):
+        Simulation(parse_scene(bad))._init_modules()
