@@ -316,9 +316,12 @@ def hb_poiseuille_case(quick: bool = False) -> CaseResult:
         "...), ~10 min each): cut-off 0.38 % (0.55 % at 40: order 0.5), 0.97 % from the exact "
         "Herschel-Bulkley profile, plug -1.07 dx; Papanastasiou 0.48 % (0.17 % at 40), plug "
         "-0.26 dx.  So the order >= 1.6 holds to 40 across only; the floor of ~0.4 % is not "
-        "compressibility (c0 = 100 u_max at 40 across: 0.542 % against 0.548 %); a suspect "
-        "is the plain (not renormalised) pair Laplacian of the laminar viscosity on the "
-        "particle rows sliding past each other.",
+        "compressibility (c0 = 100 u_max at 40 across: 0.542 % against 0.548 %) nor the "
+        "rheology: a Newtonian fluid (power-law, n = 1) in the same channel gives 1.09, "
+        "0.63, 0.50 % at 20, 40, 80 across, too fast everywhere (0.1 % of u_max at the "
+        "wall row, 0.49 % at the centre).  The laminar term's plain pair Laplacian has the "
+        "lattice factor 0.9974 (2D, R = 3 dx; tests/test_operators.py): the viscosity is "
+        "0.26 % low at every dx.",
         "The explicit viscous step is set by mu_max = k gd0^(n-1) + tau0/gd0 "
         "('mu_max/mu_w'): the step count grows as (H/dx)^2 mu_max/mu_w.",
     ]
