@@ -58,3 +58,23 @@ def test_substrate_solution_independent_of_backend():
     f = s.load_vector(dT_nodal=dT, tractions={"top": [0.0, 0.0, -1e6]})[0]
     ref = sp.linalg.spsolve(s.K[s.I][:, s.I].tocsc(), f[s.I])
     assert np.abs(u[0][s.I] - ref).max() <= 1e-10 * np.abs(ref).max()
+
+
+def test_splu_without_pymetis_falls_back_to_mmd(monkeypatch):
+    import builtins
+
+    real_import = builtins.__import__
+
+    def no_pymetis(name, *args, **kw):
+        if name == "pymetis":
+            raise ImportError("no pymetis")
+        return real_import(name, *args, **kw)
+
+    monkeypatch.setattr(builtins, "__import__", no_pymetis)
+    sub = _substrate()
+    A = sub.K[sub.I][:, sub.I]
+    assert node_nested_dissection(A, sub.I // sub.dim) is None
+    fac = factorize(A, "splu", groups=sub.I // sub.dim)
+    assert fac.ordering == "mmd (superlu)"
+    b = np.ones(A.shape[0])
+    assert np.linalg.norm(A @ fac.solve(b) - b) <= 1e-12 * np.linalg.norm(b)
