@@ -222,6 +222,9 @@ class AxisymmetricFluidModule(PhysicsModule):
         if self.params.pressure != "wcsph":
             raise ValueError(f'fluid: pressure = "{self.params.pressure}" is not available '
                              'with geometry = "axisymmetric" (only "wcsph")')
+        if self.params.rheology != "newtonian":  # its force pass has no mu(gamma_dot)
+            raise ValueError(f'fluid: rheology = "{self.params.rheology}" is not available '
+                             'with geometry = "axisymmetric" (only "newtonian")')
         if self.params.surface_tension not in ("none", "csf"):
             raise ValueError(f'fluid: surface_tension = "{self.params.surface_tension}" is '
                              'not available with geometry = "axisymmetric"; set "csf" (with the '

@@ -246,3 +246,18 @@ def test_short_bingham_channel_against_the_exact_profile():
     assert np.all(gd[centre] < r["gamma_dot_0"])
     np.testing.assert_allclose(mu[centre], mu_max, rtol=1e-12)
     assert np.ptp(u[centre]) < 0.01 * u_hb.max()
+
+
+def test_axisymmetric_fluid_refuses_a_non_newtonian_rheology():
+    """The (r, z) fluid has its own force pass, which does not call the rheology: a
+    Herschel-Bulkley scene there must stop at set-up instead of running as a Newtonian
+    fluid (it did: the key was accepted and silently ignored)."""
+    from test_scene_axisymmetric import droplet_scene
+
+    from sphfem.scene import parse_scene
+    from sphfem.simulation import Simulation
+
+    data = droplet_scene()
+    data["fluid"].update(rheology="bingham", tau0=10.0, k=0.1, gamma_dot_0=100.0)
+    with pytest.raises(ValueError, match="rheology"):
+        Simulation(parse_scene(data))
