@@ -84,8 +84,7 @@ from functools import lru_cache
 import numpy as np
 from numba import njit, prange
 
-from sphfem.fluid.passes import grad_factor
-from sphfem.fluid.surface import color_gradient
+from sphfem.fluid.surface import color_gradient, color_gradient_row
 from sphfem.fluid.surface_tension import SurfaceTensionMethod, register
 from sphfem.kernels import FASTMATH, kernel_f
 from sphfem.neighbors import build_neighbor_list
@@ -316,28 +315,14 @@ def wall_rows_gradient(x, V, kind, offsets, indices, R, sigma, kernel_code, peri
     """g[b] = sum_fluid V_j grad_b W_bj for wall rows b (their fluid neighbours)."""
     n, dim = x.shape
     fac2 = sigma / (R * R)
-    R2 = R * R
     periodic = False
     for k in range(dim):
         periodic |= period[k] > 0.0
     for i in prange(n):
         if kind[i] != WALL:
             continue
-        g0 = 0.0
-        g1 = 0.0
-        g2 = 0.0
-        for jj in range(offsets[i], offsets[i + 1]):
-            j = indices[jj]
-            if kind[j] != FLUID:
-                continue
-            r0, r1, r2 = pair_sep(x, i, j, dim, period, periodic)
-            d2 = r0 * r0 + r1 * r1 + r2 * r2
-            if d2 >= R2 or d2 == 0.0:
-                continue
-            t = V[j] * grad_factor(np.sqrt(d2), R, fac2, kernel_code)
-            g0 += t * r0
-            g1 += t * r1
-            g2 += t * r2
+        g0, g1, g2 = color_gradient_row(i, x, V, kind, offsets, indices, R, fac2, kernel_code,
+                                        period, periodic, True)
         g[i, 0] = g0
         if dim > 1:
             g[i, 1] = g1

@@ -393,21 +393,28 @@ def rayleigh_period(dim: int, sigma: float, rho: float, R: float, l: int = 2) ->
     return 2 * math.pi / math.sqrt(k * sigma / (rho * R**3))
 
 
-def surface_ripple(x: np.ndarray, dx: float, lmax: int = 4) -> float:
-    """Particle-scale roughness of a 2D drop's surface [units of dx]: in each angular bin
-    (width ~1.5 dx on the outer radius) about the centroid the radius of the outermost
-    particle, r_k(theta_k); the rms of r_k minus its least-squares Fourier series up to mode
-    ``lmax`` (the drop's shape modes: l = 2 and its nonlinear harmonics; l = 1, 3 from a
-    slightly off centroid).  0 for any smooth shape; a ring of particles gives ~0.01."""
-    c = x - x.mean(0)
-    r = np.hypot(c[:, 0], c[:, 1])
-    th = np.arctan2(c[:, 1], c[:, 0])
+def outermost_particles(x: np.ndarray, dx: float):
+    """The outermost particle of each angular bin (width ~1.5 dx on the outer radius) about
+    the centroid of a 2D particle set: (their indices, the positions relative to the
+    centroid ``d``, radii ``r`` and angles ``th`` of all particles)."""
+    d = x - x.mean(0)
+    r = np.hypot(d[:, 0], d[:, 1])
+    th = np.arctan2(d[:, 1], d[:, 0])
     M = max(8, int(2 * math.pi * r.max() / (1.5 * dx)))
     b = ((th + math.pi) / (2 * math.pi) * M).astype(int) % M
     best = np.full(M, -1)
     for k in np.argsort(r):  # ascending radius: the last write per bin is the outermost
         best[b[k]] = k
-    idx = best[best >= 0]
+    return best[best >= 0], d, r, th
+
+
+def surface_ripple(x: np.ndarray, dx: float, lmax: int = 4) -> float:
+    """Particle-scale roughness of a 2D drop's surface [units of dx]: the radii r_k(theta_k)
+    of the outermost particles (:func:`outermost_particles`); the rms of r_k minus its
+    least-squares Fourier series up to mode ``lmax`` (the drop's shape modes: l = 2 and its
+    nonlinear harmonics; l = 1, 3 from a slightly off centroid).  0 for any smooth shape; a
+    ring of particles gives ~0.01."""
+    idx, _, r, th = outermost_particles(x, dx)
     rm, tm = r[idx], th[idx]
     A = np.column_stack([np.ones_like(tm)] + [f(lm * tm) for lm in range(1, lmax + 1)
                                              for f in (np.cos, np.sin)])

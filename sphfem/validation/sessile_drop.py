@@ -38,6 +38,7 @@ from sphfem.fluid import FluidParams, FluidSolver
 from sphfem.fluid.setup import lattice, make_particles
 from sphfem.particles import ParticleKind
 from sphfem.validation import CaseResult, Criterion, Run, Timer, register
+from sphfem.validation.fluid import outermost_particles
 
 SUPPORT = 3.0
 LAYERS = 3
@@ -54,19 +55,10 @@ def fit_circle(p: np.ndarray):
 
 
 def surface_points(x: np.ndarray, dx: float, y_min: float) -> np.ndarray:
-    """The free surface of a 2D drop: in each angular bin (width ~1.5 dx on the outer
-    radius) about the centroid the outermost particle, moved out radially by dx/2; only
-    points with y >= ``y_min``."""
-    c = x.mean(0)
-    d = x - c
-    r = np.hypot(d[:, 0], d[:, 1])
-    th = np.arctan2(d[:, 1], d[:, 0])
-    M = max(8, int(2 * math.pi * r.max() / (1.5 * dx)))
-    b = ((th + math.pi) / (2 * math.pi) * M).astype(int) % M
-    best = np.full(M, -1)
-    for k in np.argsort(r):  # ascending: the last write per bin is the outermost
-        best[b[k]] = k
-    idx = best[best >= 0]
+    """The free surface of a 2D drop: the outermost particles of the angular bins about the
+    centroid (:func:`sphfem.validation.fluid.outermost_particles`), moved out radially by
+    dx/2; only points with y >= ``y_min``."""
+    idx, d, r, _ = outermost_particles(x, dx)
     pts = x[idx] + 0.5 * dx * d[idx] / r[idx, None]
     return pts[pts[:, 1] >= y_min]
 
