@@ -712,13 +712,15 @@ class FEMSubstrate(QuasiStaticSubstrate):
     # ------------------------------------------------------------------ projection
     def project_tensor(self, Sq: np.ndarray) -> np.ndarray:
         """L2 projection of a (3, 3, nelems, nqp) quadrature field onto P1 vertex values,
-        (nvertices, 3, 3): M x = int s phi_j dx for the 6 components at once, by conjugate
-        gradients on the P1 mass matrix M (Jacobi preconditioned; well conditioned whatever
-        the mesh size) to a relative residual of 1e-12 in every component."""
+        (nvertices, 3, 3): M x = int s phi_j dx for the 6 components at once, M the P1 mass
+        matrix.  2D: M factorised once (a planar graph's factor stays sparse); 3D: conjugate
+        gradients (Jacobi preconditioned; M is well conditioned whatever the mesh size) to a
+        relative residual of 1e-12 in every component."""
         vb = self.vbasis
         if self._mass is None:
             self._mass = forms.mass.assemble(vb).tocsr()
             self._mass_diag = self._mass.diagonal()
+            self._mass_factor = factorize(self._mass, "splu") if self.dim == 2 else None
             self._mass_weights = np.stack([np.asarray(vb.basis[k][0]) * vb.dx
                                            for k in range(vb.Nbfun)])  # (nloc, nel, nqp)
         iu = np.triu_indices(3)
@@ -726,7 +728,10 @@ class FEMSubstrate(QuasiStaticSubstrate):
         vals = np.einsum("keq,ceq->kec", self._mass_weights, comps)  # (nloc, nel, 6)
         rows = np.repeat(vb.element_dofs[:, :, None], 6, axis=2) * 6 + np.arange(6)
         rhs = np.bincount(rows.ravel(), vals.ravel(), minlength=6 * vb.N).reshape(vb.N, 6)
-        x = _block_pcg(self._mass, rhs, self._mass_diag, rtol=1e-12, maxiter=500)
+        if self._mass_factor is not None:
+            x = self._mass_factor.solve(rhs)
+        else:
+            x = _block_pcg(self._mass, rhs, self._mass_diag, rtol=1e-12, maxiter=500)
         out = np.empty((vb.N, 3, 3))
         out[:, iu[0], iu[1]] = x
         out[:, iu[1], iu[0]] = x
