@@ -102,7 +102,13 @@ def figures(summary: dict, speed: float, diameter: float) -> dict:
     rises = [h["T_impact"] - T_s0 for h in win]
     ideal = T_c - T_s0
     sp = fl["spreading"]
+    mat = summary["scene"]["materials"][summary["scene"]["coupling"]["material"]]
+    # a surface held at the ideal contact rise over a spot wider than the heated depth is in
+    # equal biaxial constraint: s_rr = s_tt = -E alpha dT / (1 - nu), s_zz = 0, so its von
+    # Mises stress is E alpha dT / (1 - nu) (the thermal plateau the peak approaches)
+    vm_thermal = mat["E"] * mat["alpha"] * ideal / (1.0 - mat["nu"])
     return {
+        "vm_thermal": vm_thermal,
         "spread": sp["max_ratio"], "spread_t_tc": sp["max_t_s"] / tc,
         "heat": sh["heat_to_substrate_J"], "heat_ideal": sh["ideal_contact_heat_J"],
         "T_impact": sum(rises) / len(rises) if rises else math.nan,
@@ -187,7 +193,10 @@ def droplet_impact(quick: bool) -> CaseResult:
                      f"MPa at {fin['vm_t_tc']:.2f} t_c after contact, r = "
                      f"{fin['vm_r_m'] * 1e6:.1f} um, z = {fin['vm_z_m'] * 1e6:.2f} um; heat "
                      f"{fin['heat'] * 1e6:.3f} uJ = {fin['heat'] / fin['heat_ideal']:.3f} of the "
-                     "ideal contact over the run's wetted-area history")
+                     "ideal contact over the run's wetted-area history; peak / thermal plateau "
+                     f"E alpha dT_c / (1 - nu) = {fin['vm_thermal'] / 1e6:.1f} MPa: "
+                     + ", ".join(f"{f['vm_peak'] / f['vm_thermal']:.3f}" for f in figs)
+                     + f" at D/dx = {list(levels)}")
     return CaseResult("droplet-impact", runs, crit, notes, resolution_label="dx [m]",
                       extra_columns={"spread": "D_max/D", "heat": "heat J",
                                      "T_impact": "rise K", "vm_peak": "vM Pa"})
