@@ -345,3 +345,23 @@ def test_surface_tension_csf_reaches_the_axisymmetric_fluid(tmp_path):
     bad["fluid"]["surface_tension"] = "iif"
     with pytest.raises((SceneError, ValueError), match="surface_tension"):
         Simulation(parse_scene(bad))._init_modules()
+
+
+def test_spread_diameter_is_the_film_not_shed_rings():
+    """The fluid module's spread diameter: 2 r_e + dx with r_e the outermost wall-row ring
+    reached from the axis without a gap over 2 dx.  A one-ring-thick film out to 10 dx
+    (rings every 0.7 dx: thinner than R/5 of the colour measure, which would read it dry)
+    gives 21 dx; a ring shed out to 20 dx and rings above the wall row do not move it."""
+    from types import SimpleNamespace
+
+    from sphfem.axisymmetric_scene import AxisymmetricFluidModule
+
+    dx = 1e-6
+    film = np.column_stack([np.arange(0.0, 10.0 + 1e-9, 0.7) * dx, np.full(15, 0.4 * dx)])
+    film[-1, 0] = 10.0 * dx
+    shed = np.array([[20.0 * dx, 0.3 * dx]])
+    above = np.array([[15.0 * dx, 3.0 * dx]])
+    me = SimpleNamespace(wall_top=0.0, dx=dx, FILM_GAP_DX=AxisymmetricFluidModule.FILM_GAP_DX)
+    for x in (film, np.vstack([film, shed, above])):
+        ps = SimpleNamespace(x=x, kind=np.full(len(x), FLUID))
+        assert AxisymmetricFluidModule.contact_diameter(me, ps) == pytest.approx(21.0 * dx)
