@@ -46,10 +46,11 @@ equilibrium; square-lattice constants, c0 from the cohesion's pressure): the l =
 phi = 0.9 it is 0.94 at R_drop = 10 dx but 0.83 at 20 dx (the cohesion's share of the
 stiffness grows with R_drop / R).  The curvature term depends
 on the particles only through the colour gradient, which vanishes in the bulk, so it adds
-no bulk stiffness: with phi = 1 (and the kernel weights) the period is 0.967 / 1.002 /
-1.016 T_Rayleigh at R_drop = 10 / 20 / 20 dx (1.3 / 1.3 / 2.2 periods run).  Its surface
-stays smooth at R_drop = 10 dx (ripple < 0.01 dx); at 20 dx it roughens from 0.006 dx to
-~0.10 dx within 1.2 periods and stays there (to 2.2 periods).
+no bulk stiffness: with phi = 1 (and the kernel weights) the period is 0.973 / 1.013 /
+1.048 / 1.047 T_Rayleigh at R_drop = 10 / 20 / 30 / 40 dx (1.6 periods after 0.3 at rest;
+``sphfem validate droplet-oscillation``, 40 dx run separately): within 5 %, but not
+converging.  Its surface stays smooth at R_drop = 10 dx (ripple 0.008 dx); at 20-40 dx it
+roughens within ~1 period to 0.11-0.15 dx and stays there (at 20 dx to 2.2 periods).
 
 Wetting (Akinci's adhesion replaced by a construction with a Young relation for both terms):
 the wall carries the colour psi = (1 + cos theta) / 2, theta = ``akinci_contact_angle``
