@@ -356,6 +356,7 @@ def test_nonfinite_output_fails_the_row(tmp_path):
         MODULES.pop("nanwriter", None)
 
 
+@pytest.mark.slow  # 124 s of one worker: the default suite's longest test (2026-12-02)
 def test_validate_stability_quick_exits_zero(tmp_path, capsys):
     """The acceptance command: every row of the quick matrix passes its checks, the rows
     that must stop stopped on their guard, the rows that must run through did, and the

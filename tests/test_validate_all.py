@@ -13,13 +13,17 @@ from sphfem.cli import main
 from sphfem.validation import load_cases
 
 CASES = sorted(load_cases())
+#: quick cases that take over a minute of one worker run with ``-m slow`` only (the
+#: axisymmetric droplet job at three spacings: 98 s)
+SLOW = {"droplet-impact"}
 
 
 def test_every_case_is_here():
     assert len(CASES) >= 16
 
 
-@pytest.mark.parametrize("name", CASES)
+@pytest.mark.parametrize("name", [pytest.param(c, marks=pytest.mark.slow) if c in SLOW
+                                  else c for c in CASES])
 def test_validate_quick(name, tmp_path, capsys):
     out = tmp_path / f"{name}.json"
     code = main(["validate", name, "--quick", "--json", str(out)])
