@@ -193,69 +193,16 @@ def mean_area(x, A, kind, offsets, indices, Rp, kcode, Lz, out):
 
 
 @njit(cache=True, parallel=True)
-def concentration_gradient(x, A, kind, offsets, indices, Rp, s2, kcode, Lz, lam_free,
-                           lam_interior, gc, nrm, near):
-    """grad C_i = sum_j A_j grad_i W_ij over every neighbour (fluid, walls, mirrors), the
-    outward normal n_i = -B_i grad C_i / |B_i grad C_i| (B_i the inverse moment matrix;
-    the plain direction where it is singular) and the class of each real FLUID row from
-    the smallest eigenvalue lambda_i of its moment matrix (Marrone et al. 2010):
-    ``near[i]`` = 1 below ``lam_interior`` (at or next to the free surface: shifted only
-    along the surface), 2 at or below ``lam_free`` (a fragment: not shifted), 0 inside."""
-    for i in prange(x.shape[0]):
-        gc[i, 0] = 0.0
-        gc[i, 1] = 0.0
-        nrm[i, 0] = 0.0
-        nrm[i, 1] = 0.0
-        near[i] = 0
-        if kind[i] != FLUID:
-            continue
-        m00 = 0.0
-        m01 = 0.0
-        m11 = 0.0
-        g0 = 0.0
-        g1 = 0.0
-        for jj in range(offsets[i], offsets[i + 1]):
-            j = indices[jj]
-            r0 = x[j, 0] - x[i, 0]
-            r1 = min_image(x[j, 1] - x[i, 1], Lz)
-            d2 = r0 * r0 + r1 * r1
-            R = 0.5 * (Rp[i] + Rp[j])
-            if d2 >= R * R or d2 == 0.0:
-                continue
-            d = math.sqrt(d2)
-            s = A[j] * (-s2 / (R * R * R) * kernels.kernel_dfdq(d / R, kcode) / d)
-            m00 += s * r0 * r0
-            m01 += s * r0 * r1
-            m11 += s * r1 * r1
-            g0 += s * r0
-            g1 += s * r1
-        gc[i, 0] = g0
-        gc[i, 1] = g1
-        lam = 0.5 * (m00 + m11 - math.sqrt((m00 - m11) ** 2 + 4.0 * m01 * m01))
-        near[i] = 2 if lam <= lam_free else (1 if lam < lam_interior else 0)
-        det = m00 * m11 - m01 * m01
-        if det > 1e-12 * (m00 * m11 + 1e-300):
-            b0 = (m11 * g0 - m01 * g1) / det
-            b1 = (m00 * g1 - m01 * g0) / det
-        else:
-            b0 = g0
-            b1 = g1
-        nb = math.sqrt(b0 * b0 + b1 * b1)
-        if nb > 0.0:
-            nrm[i, 0] = -b0 / nb
-            nrm[i, 1] = -b1 / nb
-
-
-@njit(cache=True, parallel=True)
 def gradients(x, rho, vg, A, kind, offsets, indices, Rp, s2, kcode, Lz, cond_max, lam_min,
-              grad_rho, dvdr, shep, Bm, qs):
+              grad_rho, dvdr, shep, Bm, qs, gc):
     """Renormalised <grad rho>, <d_r (v_r / r)> and <d_r v_z> (``dvdr[:, 0]``, ``[:, 1]``)
     of the real FLUID rows.
 
     ``vg``: the velocity seen by the viscous terms (fluid: v, wall: Adami ghost velocity,
     mirrors: the source's with v_r negated).  Rows that are not fluid are zeroed.  Pair
     support (R_i + R_j) / 2, kernel normalisation ``s2`` / R^2.  ``qs``: the Shepard
-    average over the fluid (and its mirrors), self included, of v_r / r.
+    average over the fluid (and its mirrors), self included, of v_r / r.  ``gc``: grad C_i =
+    sum_j A_j grad_i W_ij over every neighbour (particle shifting).
     """
     for i in prange(x.shape[0]):
         grad_rho[i, 0] = 0.0
@@ -275,6 +222,8 @@ def gradients(x, rho, vg, A, kind, offsets, indices, Rp, s2, kcode, Lz, cond_max
         shep[i] = A[i] * s2 / (Rp[i] * Rp[i])  # Shepard sum, self included
         b0 = 0.0  # sum A F (v_z,j - v_z,i) r_ij
         b1 = 0.0
+        gc0 = 0.0  # sum A F r_ij = grad C
+        gc1 = 0.0
         wq = shep[i]
         sq = wq * qi
         for jj in range(offsets[i], offsets[i + 1]):
@@ -292,6 +241,8 @@ def gradients(x, rho, vg, A, kind, offsets, indices, Rp, s2, kcode, Lz, cond_max
             m00 += s * r0 * r0
             m01 += s * r0 * r1
             m11 += s * r1 * r1
+            gc0 += s * r0
+            gc1 += s * r1
             t = s * (rho[j] - rho[i])
             g0 += t * r0
             g1 += t * r1
@@ -308,6 +259,8 @@ def gradients(x, rho, vg, A, kind, offsets, indices, Rp, s2, kcode, Lz, cond_max
                 wq += w
                 sq += w * qj
         qs[i] = sq / wq
+        gc[i, 0] = gc0
+        gc[i, 1] = gc1
         good, c00, c01, c02, c10, c11, c12, c20, c21, c22 = invert_sym3(
             m00, m01, 0.0, m11, 0.0, 1.0, 2, cond_max)
         # smallest eigenvalue of the moment matrix (the identity under full support)
@@ -664,6 +617,7 @@ class AxisymmetricFluid:
         dvdr = np.zeros((m, 2))
         shep = np.zeros(m)
         Bm = np.zeros((m, 5))
+        gc = np.zeros((m, 2))
         qs = np.zeros(m)
         A[:n] = A0
         Rp = np.zeros(m)
@@ -678,7 +632,9 @@ class AxisymmetricFluid:
         _fill_mirrors(n, src, mtype, zw, self.gravity[1], x, v, vg, rho, p, A, mt, mu, gr, dvdr,
                       Rp)
         gradients(x, rho, vg, A, kind, nl.offsets, nl.indices, Rp, self.s2, self.kcode,
-                  self.Lz, pa.cond_max, self.renorm_lambda_min, gr, dvdr, shep, Bm, qs)
+                  self.Lz, pa.cond_max, self.renorm_lambda_min, gr, dvdr, shep, Bm, qs, gc)
+        #: grad C and the renormalisation B (c00, c01, c11) of the real rows (shifting)
+        self._grad_c = (gc[:n].copy(), Bm[:n, :3].copy())
         if self.h_mode == "mean-area":  # R_i of the next evaluation
             abar = np.empty(m)
             mean_area(x, A, kind, nl.offsets, nl.indices, Rp, self.kcode, self.Lz, abar)
@@ -803,20 +759,20 @@ class AxisymmetricFluid:
         from sphfem.fluid.surface import shift
 
         a = self.augmented
-        m = a["x"].shape[0]
-        gc = np.zeros((m, 2))
-        nrm = np.zeros((m, 2))
-        near = np.zeros(m, np.int8)
-        nl = a["nbrs"]
-        concentration_gradient(a["x"], a["A"], a["kind"], nl.offsets, nl.indices, a["Rp"],
-                               self.s2, self.kcode, self.Lz, self.renorm_lambda_min, 0.75,
-                               gc, nrm, near)
         n = self.n
+        gc, B = self._grad_c  # of this step's (mid-step) evaluation
+        # outward normal n = -B grad C / |B grad C| (B the identity where it was not used)
+        b = np.column_stack([B[:, 0] * gc[:, 0] + B[:, 1] * gc[:, 1],
+                             B[:, 1] * gc[:, 0] + B[:, 2] * gc[:, 1]])
+        nb = np.sqrt((b**2).sum(axis=1))
+        nrm = -b / np.where(nb > 0.0, nb, 1.0)[:, None]
+        fragment = self.lam <= self.renorm_lambda_min
+        near = (self.lam < 0.75) & ~fragment
         h = 0.5 * a["Rp"][:n]
-        gc = gc[:n] * (h / h.max())[:, None]  # coefficient A h_max below: per-particle h_i
-        kind = np.where(near[:n] == 2, WALL, self.kind).astype(np.int8)  # fragments: none
+        gc = gc * (h / h.max())[:, None]  # coefficient A h_max below: per-particle h_i
+        kind = np.where(fragment, WALL, self.kind).astype(np.int8)  # fragments: none
         out = np.zeros(n)
-        shift(self.x, self.v, self.rho, kind, gc, nrm[:n], near[:n] == 1, a["grad_rho"][:n],
+        shift(self.x, self.v, self.rho, kind, gc, nrm, near, a["grad_rho"][:n],
               self.shifting * float(h.max()), dt, 0.1 * float(h.min()), self.shift_surface, out)
         self.last_shift = float(out.max() / h.min())
 
