@@ -742,7 +742,7 @@ class AxisymmetricFluid:
         when compressed and never pull.  Inside the fluid tension is left to the equation
         of state.  Without it a surface ring whose divergence is misjudged on its one-sided
         support drifts below rho0 and its tension pulls its neighbours out of the surface."""
-        if self.free_surface_no_tension and hasattr(self, "lam"):
+        if self.free_surface_no_tension:
             s = self.fluid & (self.lam < 0.75) & (self.rho < self.params.rho0)
             self.rho[s] = self.params.rho0
 
