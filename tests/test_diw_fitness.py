@@ -1,0 +1,110 @@
+"""Deposit fitness on constructed deposits with known answers: the thesis metric (eq. 3.47),
+deviation in nozzle diameters, bead width, gaps and pieces."""
+
+import math
+
+import numpy as np
+import pytest
+
+from sphfem.diw.fitness import deposit_fitness, uncovered_stretches
+from sphfem.diw.toolpath import Arc, DesiredPath, Line, named_case
+
+D = 0.7e-3
+H = 0.1e-3
+
+
+def bead_on_line(length, rows, dx, y0=0.0):
+    """Lattice bead along +x: columns every dx on [0, length], rows at y0 + rows[k]."""
+    x = np.arange(0.0, length + 0.5 * dx, dx)
+    X, Y = np.meshgrid(x, np.asarray(rows) + y0, indexing="ij")
+    return np.column_stack([X.ravel(), Y.ravel(), np.full(X.size, 5e-5)])
+
+
+def test_bead_offset_from_a_line():
+    """Three rows at y = e + (-dx, 0, dx) along a 5 mm line: dist = |y| exactly, so
+    f = N_col sum_rows (|y|/h)^3, max dev = (e + dx)/D, mean = e/D (all rows on one side),
+    width = 2 dx + h, no gap, one piece."""
+    L, dx, e = 5e-3, H, 3 * H
+    line = DesiredPath([Line((0.0, 0.0), (L, 0.0))])
+    rows = np.array([-dx, 0.0, dx])
+    pos = bead_on_line(L, rows, dx, y0=e)
+    f = deposit_fitness(pos, H, D, line)
+    ncol = len(pos) // 3
+    assert f["thesis"] == pytest.approx(ncol * np.sum(((e + rows) / H) ** 3), rel=1e-12)
+    assert f["objective"] == f["thesis"]
+    assert f["max_dev_D"] == pytest.approx((e + dx) / D, rel=1e-12)
+    assert f["mean_dev_D"] == pytest.approx(e / D, rel=1e-12)
+    assert f["width_mean_D"] == pytest.approx((2 * dx + H) / D, rel=1e-12)
+    assert f["width_max_D"] == pytest.approx((2 * dx + H) / D, rel=1e-12)
+    assert (f["gap_D"], f["n_gaps"], f["pieces"]) == (0.0, 0, 1)
+
+
+def test_bead_on_an_arc_is_measured_radially():
+    """Particles on a circle of radius r + e around a half-circle path of radius r: every
+    dist = e, f = N (e/h)^3."""
+    r, e = 2e-3, 0.25e-3
+    path = DesiredPath([Arc((0.0, 0.0), r, 0.0, math.pi)])
+    th = np.linspace(0.0, math.pi, 200)
+    pos = np.column_stack([(r + e) * np.cos(th), (r + e) * np.sin(th)])
+    f = deposit_fitness(pos, H, D, path)
+    assert f["thesis"] == pytest.approx(200 * (e / H) ** 3, rel=1e-12)
+    assert f["max_dev_D"] == pytest.approx(e / D, rel=1e-12)
+
+
+def test_gap_in_the_bead():
+    """A single-row bead with the particles at x in (2, 3) mm removed: the uncovered stretch
+    is (next - previous) - 2 h, the deposit has two pieces, and the objective adds
+    gap_weight (l/h)^3."""
+    L, dx = 5e-3, H / 2
+    line = DesiredPath([Line((0.0, 0.0), (L, 0.0))])
+    pos = bead_on_line(L, [0.0], dx)
+    keep = (pos[:, 0] < 2e-3 - 1e-12) | (pos[:, 0] > 3e-3 + 1e-12)
+    pos = pos[keep]
+    prev = pos[pos[:, 0] < 2.5e-3, 0].max()
+    nxt = pos[pos[:, 0] > 2.5e-3, 0].min()
+    gap = (nxt - prev) - 2 * H
+    f = deposit_fitness(pos, H, D, line, gap_weight=2.0)
+    assert f["n_gaps"] == 1
+    assert f["gap_D"] == pytest.approx(gap / D, rel=1e-9)
+    assert f["pieces"] == 2
+    assert f["objective"] == pytest.approx(f["thesis"] + 2.0 * (gap / H) ** 3, rel=1e-12)
+
+
+def test_particles_far_off_the_path_do_not_close_a_gap():
+    """A bead covering only the first half of the path, plus a blob 2 D off the second
+    half: the second half is a gap (blob too far to cover it), ends uncovered too."""
+    L, dx = 6e-3, H
+    line = DesiredPath([Line((0.0, 0.0), (L, 0.0))])
+    bead = bead_on_line(3e-3, [0.0], dx)
+    blob = bead_on_line(2e-3, [0.0], dx, y0=2 * D) + [3.5e-3, 0.0, 0.0]
+    f = deposit_fitness(np.vstack([bead, blob]), H, D, line)
+    assert f["n_gaps"] == 1
+    assert f["gap_D"] == pytest.approx((L - bead[:, 0].max() - H) / D, rel=1e-9)
+    assert f["max_dev_D"] == pytest.approx(2.0, rel=1e-12)
+
+
+def test_uncovered_stretches_at_the_ends():
+    """Intervals s +- r inside [0, total]: the ends before the first and after the last."""
+    np.testing.assert_allclose(uncovered_stretches(np.array([3.0, 5.0]), 1.0, 10.0),
+                               [2.0, 4.0])
+    np.testing.assert_allclose(uncovered_stretches(np.array([]), 1.0, 10.0), [10.0])
+
+
+def test_corner_overshoot_of_bend90():
+    """A bead following the 90-degree bend but overshooting the corner by a straight run of
+    length a beyond x = 0: the far end (a, 0) is nearest to the corner, a away, so the
+    largest deviation is a."""
+    path, _ = named_case("bend90")
+    a = 2.0 * D
+    leg1 = bead_on_line(5e-3, [0.0], H) - [5e-3, 0.0, 0.0]
+    over = bead_on_line(a, [0.0], H)  # beyond the corner along +x
+    f = deposit_fitness(np.vstack([leg1, over]), H, D, path)
+    assert f["max_dev_D"] == pytest.approx(a / D, rel=1e-9)
+
+
+def test_bad_deposits_raise():
+    line = DesiredPath([Line((0.0, 0.0), (1e-3, 0.0))])
+    with pytest.raises(ValueError, match="empty deposit"):
+        deposit_fitness(np.zeros((0, 3)), H, D, line)
+    with pytest.raises(ValueError, match="NaN"):
+        deposit_fitness(np.array([[np.nan, 0.0, 0.0]]), H, D, line)
