@@ -35,3 +35,5 @@ The contract between the optimisation machinery (part A) and the physics (part B
 The fitness reads only ``positions[:, :2]`` (projection on the substrate), ``h`` and
 ``nozzle_diameter``; a non-None ``stopped_reason`` marks a failed evaluation.
 """
+
+from sphfem.diw import scene_section as _scene_section  # noqa: E402, F401  (registers [extrusion])
