@@ -1,0 +1,150 @@
+"""Extrusion of direct ink writing (sphfem.diw.extrusion, issue 18 part B): the nozzle's
+inflow flux, emission without overlap, mass conservation of a straight bead, and the
+overshoot of the naive 90-degree bend (slow).
+
+The reduced scene examples/diw/line_reduced.toml: thesis table 3.2's ink density and nozzle
+(D = 0.7 mm) with a Herschel-Bulkley rheology, 4 particles across the bore, DFSPH with
+Weiler et al.'s implicit viscosity.  The toolpaths are stand-ins written here (the contract:
+position(t), velocity(t), duration).
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from sphfem.diw.extrusion import bore_lattice, simulate_deposit
+from sphfem.errors import SceneError
+from sphfem.scene import load_scene, parse_scene_toml
+
+ROOT = Path(__file__).resolve().parents[1]
+REDUCED = ROOT / "examples" / "diw" / "line_reduced.toml"
+
+
+class Line:
+    """Straight toolpath from ``p0`` along ``direction`` at ``speed`` for ``length``."""
+
+    def __init__(self, p0, direction, speed, length):
+        self.p0 = np.asarray(p0, float)
+        self.d = np.asarray(direction, float) / np.linalg.norm(direction)
+        self.speed = speed
+        self.length = length
+        self.duration = length / speed
+
+    def position(self, t):
+        return self.p0 + self.d * self.speed * t
+
+    def velocity(self, t):
+        return self.d * self.speed
+
+
+class Bend:
+    """Two straight legs of ``leg`` meeting at the origin at 90 degrees: along +x to the
+    corner, then along +y, at constant ``speed`` (the naive 90-degree toolpath)."""
+
+    def __init__(self, leg, speed):
+        self.leg, self.speed = leg, speed
+        self.duration = 2 * leg / speed
+
+    def position(self, t):
+        s = self.speed * t
+        return np.array([s - self.leg, 0.0]) if s <= self.leg else np.array(
+            [0.0, s - self.leg])
+
+    def velocity(self, t):
+        return np.array([self.speed, 0.0]) if self.speed * t < self.leg else np.array(
+            [0.0, self.speed])
+
+
+def test_bore_lattice_flux_is_exact():
+    """The piston speed makes the flux N_b dx^2 U_b equal Q for any bore lattice, and the
+    lattice disc stays within a few per cent of pi D^2 / 4 from 4 points across."""
+    D = 7e-4
+    for n_across in (4, 6, 8, 12):
+        dx = D / n_across
+        pts = bore_lattice(D, dx)
+        r = np.hypot(pts[:, 0], pts[:, 1])
+        assert r.max() < D / 2                         # inside the bore
+        assert abs(pts.mean(axis=0)).max() < 1e-12 * D  # centred on the axis
+        ratio = pts.shape[0] * dx**2 / (math.pi * D**2 / 4)
+        assert 0.9 < ratio < 1.15
+
+
+def test_extrusion_scene_needs_one_flux():
+    text = REDUCED.read_text().replace("extrusion_speed = 0.1",
+                                       "extrusion_speed = 0.1\nflow_rate = 1e-8")
+    with pytest.raises(SceneError, match="exactly one of extrusion_speed"):
+        parse_scene_toml(text, source="x.toml")
+
+
+@pytest.fixture(scope="module")
+def straight_bead():
+    """An 8 mm straight line at 30 degrees to the lattice axes (so the bead's centreline is
+    not given by symmetry); about 10 s."""
+    scene = load_scene(REDUCED)
+    ang = math.radians(30.0)
+    path = Line([0.0, -1.5e-3], [math.cos(ang), math.sin(ang)], scene.extrusion.nozzle_speed,
+                8e-3)
+    return scene, path, simulate_deposit(scene, path)
+
+
+def test_emitted_volume_matches_flux(straight_bead):
+    """Emitted ink = Q t to within one buffer layer (N_b dx^3), and the ink leaving the
+    outlet does so at Q (least-squares slope over 20-100 % of the path time: within 2 %)."""
+    scene, path, res = straight_bead
+    info = res.info
+    assert info["stopped_reason"] is None
+    dx = info["dx"]
+    layer = info["bore_points"] * dx**3
+    Qt = info["expected_emitted_volume_m3"]
+    assert Qt == pytest.approx(info["flow_rate_m3_per_s"] * path.duration, rel=1e-12)
+    assert abs(info["emitted_volume_m3"] - Qt) <= layer
+    h = info["history"]
+    t, out = np.asarray(h["t"]), np.asarray(h["outflow"])
+    win = (t > 0.2 * path.duration) & (t <= path.duration)
+    slope = np.polyfit(t[win], out[win], 1)[0]
+    assert slope == pytest.approx(info["flow_rate_m3_per_s"], rel=0.02)
+
+
+def test_emission_does_not_overlap(straight_bead):
+    """The released and the new buffer layer are never closer than 0.75 dx to any particle
+    (layers enter dx apart; the ink below the piston is compressed only by the solver's
+    density tolerance)."""
+    info = straight_bead[2].info
+    assert info["emissions"] > 10
+    assert info["emission_min_distance_over_dx"] >= 0.75
+
+
+def test_straight_bead_mass_and_centreline(straight_bead):
+    """Mass conservation of the steady bead: ink volume per unit length over the window
+    s in [L/2, L - 2D] of the path equals Q / U_nozzle within 5 %; its centroid lies on the
+    path within 0.25 dx (normal offset) and every D-long slice's within dx."""
+    scene, path, res = straight_bead
+    dx, D = res.info["dx"], res.nozzle_diameter
+    rel = res.positions[:, :2] - path.p0
+    s = rel @ path.d
+    nrm = rel @ np.array([-path.d[1], path.d[0]])
+    a, b = path.length / 2, path.length - 2 * D
+    win = (s > a) & (s < b)
+    area = win.sum() * dx**3 / (b - a)
+    Q = res.info["flow_rate_m3_per_s"]
+    assert area == pytest.approx(Q / path.speed, rel=0.05)
+    assert abs(nrm[win].mean()) < 0.25 * dx
+    for lo in np.arange(a, b - D, D):
+        sl = (s > lo) & (s < lo + D)
+        assert abs(nrm[sl].mean()) < dx
+
+
+@pytest.mark.slow
+def test_naive_bend_overshoots_corner():
+    """The naive 90-degree toolpath deposits ink beyond the corner (x > 0, where the path
+    never goes) by more than a quarter of a nozzle diameter; the coarse reduced scene."""
+    scene = load_scene(REDUCED)
+    path = Bend(4e-3, scene.extrusion.nozzle_speed)
+    res = simulate_deposit(scene, path)
+    assert res.info["stopped_reason"] is None
+    over = res.positions[:, 0].max() / res.nozzle_diameter
+    assert over > 0.25
