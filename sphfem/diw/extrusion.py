@@ -347,6 +347,7 @@ def simulate_deposit(scene, path, out_dir=None) -> DepositResult:
     every``), or None.  A guard stop does not raise: ``info["stopped_reason"]`` says why.
     """
     t_wall = time.perf_counter()
+    t_cpu = time.process_time()
     ps, noz = build(scene, path)
     params = params_from_scene(scene)
     ink, _ = _blocks(scene)
@@ -420,6 +421,7 @@ def simulate_deposit(scene, path, out_dir=None) -> DepositResult:
     info = {
         "steps": solver.step_count,
         "wall_s": time.perf_counter() - t_wall,
+        "cpu_s": time.process_time() - t_cpu,
         "stopped_reason": stopped,
         "t_end_s": t,
         "dx": dx,
