@@ -97,10 +97,36 @@ g h / v (first order).  t_w counts from the wetting time: the start of the first
 when the node is wet at the first observation, else the midpoint of the step in which
 it became wet (it was dry at the start, wet at the end); it restarts when the node dries.
 
-What the model assumes (and where it is not exact): the fluid layer grows from the
-wetting time like the similarity solution (stagnant fluid; a spreading lamella's
-boundary layer is thinner, so (4) under-predicts there until the layer is resolved);
-T_inf and T_wall vary slowly compared with the layer's age; one fluid material per node.
+The strained layer (``layer = "strained"``)
+-------------------------------------------
+Over a spreading droplet the fluid is not stagnant: near the wall the tangential flow
+stretches the layer at the rate a = div_wall u_par (the wall-parallel divergence; by
+continuity the normal velocity is w = -a z close to the wall), and the layer stops
+growing once the stretching balances conduction.  The erf profile stays the exact
+solution of the strained layer dT/dt - a z dT/dz = alpha_f d2T/dz2 for any a(t), with
+
+    T = T_wall + (T_inf - T_wall) erf(z / (2 s)),   d(s^2)/dt = alpha_f - 2 a s^2,          (6)
+
+(substitute T(z / 2s(t)): the erf's F'' = -2 eta F' needs 2 s s' + 2 a s^2 = alpha_f);
+a = 0 gives back s^2 = alpha_f t_w, a constant a the steady s^2 = alpha_f / (2 a) of the
+stagnation-point layer (axisymmetric u_r = A r: a = 2 A).  With "strained", the closure
+(3)-(4) reads s from (6) per wetted node (s^2 = 0 at wetting, advanced exactly over a
+step for a held constant; the flux's step mean of 1/s by Gauss quadrature in u =
+sqrt(t - t_start)), and a from the contact layer's own motion: a weighted least-squares
+linear fit of the particles' tangential velocities within ``strain_radius`` particle
+sizes of the node (:func:`surface_divergence`; on axisymmetric walls u_r/r added, the
+particles mirrored at the axis).  That a is also the rate at which the SPH flow renews
+the wall cell (the first row is stretched apart and refilled from above at div_wall u),
+so the temperature the closure reads from the wall cell is the one (3) assumes: the
+stagnant closure in a strained flow reads a renewed, hot wall cell through a layer
+s = sqrt(alpha_f t_w) that keeps growing, infers T_inf too high by 1/Phi, and the
+impact-point temperature then rises with resolution (validation droplet-impact).
+
+What the model assumes (and where it is not exact): the fluid layer is the similarity
+solution from the wetting time (stagnant: a = 0; strained: (6) with the strain of the
+wall cell, which on a no-slip wall is the strain at half a cell's height: larger than
+inside a layer thinner than the viscous one); T_inf and T_wall vary slowly compared with
+the layer's age; one fluid material per node.
 """
 
 from __future__ import annotations
@@ -114,10 +140,13 @@ from scipy.special import erf
 from sphfem.fem.heat_transient import ierfc
 
 __all__ = ["ContactHeatInterface", "cell_mean_erf", "contact_solution",
-           "step_mean_inv_sqrt"]
+           "step_mean_inv_sqrt", "strained_layer_s2", "strained_mean_inv_s",
+           "surface_divergence"]
 
 #: wetting criteria: "contact-layer" (eq. 2) or "chi" (the earlier height taper, eq. 2')
 WETTING = ("contact-layer", "chi")
+#: fluid-side layer models: "stagnant" (s^2 = alpha_f t_w) or "strained" (eq. 6)
+LAYERS = ("stagnant", "strained")
 
 
 def cell_mean_erf(a, b, s):
@@ -159,6 +188,99 @@ def contact_solution(t, T_f, T_s, k_f, rho_f, c_f, k_s, rho_s, c_s):
         return Ti, C / np.sqrt(t), 2.0 * C * np.sqrt(t)
 
 
+def strained_layer_s2(s2, a, alpha, tau):
+    """s^2 after a time ``tau`` of eq. (6), d(s^2)/dt = alpha - 2 a s^2 with the strain
+    ``a`` held constant, from ``s2``: s2 e^(-2 a tau) + alpha tau (1 - e^(-x)) / x,
+    x = 2 a tau (-> s2 + alpha tau as a -> 0), elementwise."""
+    s2, a, tau = np.broadcast_arrays(*(np.asarray(v, float) for v in (s2, a, tau)))
+    x = np.maximum(2.0 * a * tau, -50.0)
+    small = np.abs(x) < 1e-6
+    xs = np.where(small, 1.0, x)
+    g = np.where(small, 1.0 - 0.5 * x + x * x / 6.0, -np.expm1(-xs) / xs)
+    return s2 * np.exp(-x) + alpha * tau * g
+
+
+def strained_mean_inv_s(s2, a, alpha, tau0, dt, n: int = 8):
+    """(1/dt) int_{tau0}^{dt} 1/s dt' over a step of length ``dt`` for a layer that
+    starts at ``s2`` at tau0 (0 <= tau0 < dt: wetted inside the step) and follows eq. (6):
+    Gauss-Legendre in u = sqrt(t' - tau0 + s2 / alpha) (the stagnant layer's age: then
+    1/s = 1/(sqrt(alpha) u) and the integrand 2 u / s is constant for a = 0, so the rule is
+    exact there and smooth for any a).  Elementwise over nodes."""
+    s2, a, tau0 = np.broadcast_arrays(*(np.asarray(v, float) for v in (s2, a, tau0)))
+    L = np.maximum(dt - tau0, 0.0)
+    t_s = np.maximum(s2, 0.0) / alpha
+    g, gw = np.polynomial.legendre.leggauss(n)
+    u0, u1 = np.sqrt(t_s)[..., None], np.sqrt(t_s + L)[..., None]
+    u = u0 + 0.5 * (g + 1.0) * (u1 - u0)
+    s = np.sqrt(strained_layer_s2(s2[..., None], a[..., None], alpha,
+                                  np.maximum(u * u - t_s[..., None], 0.0)))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        f = np.where(s > 0, 2.0 * u / s, 2.0 / math.sqrt(alpha))
+    return np.sum(0.5 * (u1 - u0) * gw * f, axis=-1) / dt
+
+
+def surface_divergence(yp, up, Y, radius: float, axisymmetric: bool = False,
+                       min_points: int | None = None):
+    """Divergence of a tangential velocity field on a plane wall at the points ``Y``
+    (k, L) (L = 1 or 2 lateral axes), from samples ``up`` (m, L) at ``yp`` (m, L): at each
+    point the weighted least-squares linear fit u(y) = c + G (y - Y) over the samples
+    within ``radius`` (weights (1 - d / radius)^2), and div = trace G; axisymmetric walls
+    (L = 1, y = r >= 0, u = u_r): samples mirrored at the axis (r -> -r, u_r -> -u_r) and
+    div = dG + c / r (2 dG on the axis).  Returns (k,) with nan where fewer than
+    ``min_points`` (default L + 2) samples fall in the radius or the fit is singular:
+    exact for a linear field."""
+    from scipy.spatial import cKDTree
+
+    yp = np.atleast_2d(np.asarray(yp, float))
+    up = np.atleast_2d(np.asarray(up, float))
+    Y = np.atleast_2d(np.asarray(Y, float))
+    k, L = Y.shape
+    out = np.full(k, np.nan)
+    if k == 0 or yp.shape[0] == 0:
+        return out
+    if axisymmetric:
+        if L != 1:
+            raise ValueError("surface_divergence: an axisymmetric wall has one lateral axis")
+        m = yp[:, 0] < radius
+        yp = np.vstack([yp, -yp[m]])
+        up = np.vstack([up, -up[m]])
+    need = L + 2 if min_points is None else int(min_points)
+    D = cKDTree(Y).sparse_distance_matrix(cKDTree(yp), radius, output_type="coo_matrix")
+    rows, cols = D.row, D.col
+    w = (1.0 - D.data / radius) ** 2
+    # pairs at distance 0 are dropped by the sparse matrix: add them back
+    d0, j0 = cKDTree(yp).query(Y, k=1)
+    z = np.flatnonzero(d0 == 0.0)
+    rows = np.concatenate([rows, z])
+    cols = np.concatenate([cols, j0[z]])
+    w = np.concatenate([w, np.ones(z.size)])
+    phi = np.concatenate([np.ones((rows.size, 1)), (yp[cols] - Y[rows]) / radius], axis=1)
+    M = np.zeros((k, L + 1, L + 1))
+    b = np.zeros((k, L + 1, L))
+    for p in range(L + 1):
+        for q in range(L + 1):
+            M[:, p, q] = np.bincount(rows, weights=w * phi[:, p] * phi[:, q], minlength=k)
+        for q in range(L):
+            b[:, p, q] = np.bincount(rows, weights=w * phi[:, p] * up[cols, q], minlength=k)
+    count = np.bincount(rows, minlength=k)
+    ok = count >= need
+    if not ok.any():
+        return out
+    cond = np.linalg.cond(M[ok])
+    good = np.flatnonzero(ok)[np.isfinite(cond) & (cond < 1e8)]
+    if good.size == 0:
+        return out
+    G = np.linalg.solve(M[good], b[good])           # (g, L + 1, L): c, then radius * grad
+    div = sum(G[:, 1 + q, q] for q in range(L)) / radius
+    if axisymmetric:
+        r = Y[good, 0]
+        on_axis = r <= 1e-9 * radius
+        div = div + np.where(on_axis, G[:, 1, 0] / radius,
+                             G[:, 0, 0] / np.where(on_axis, 1.0, r))
+    out[good] = div
+    return out
+
+
 class ContactHeatInterface:
     """Fluid particles -> :class:`~sphfem.fem.heat_transient.TransientHeat` surface (module
     docstring).
@@ -167,15 +289,18 @@ class ContactHeatInterface:
     ``x[axis] = level``; the fluid lies on the side ``side`` = +1 / -1 of it).  ``k_f``,
     ``rho_f``, ``c_f``: the fluid's properties; ``period`` (dim,) periodic lengths along
     the wall (0: open) of the cell starting at ``lo`` (footprints wrap); footprint parts
-    beyond an open surface's extent are dropped.  Call :meth:`step` once per coupling
-    step.
+    beyond an open surface's extent are dropped.  ``layer``: "stagnant" (s^2 = alpha_f
+    t_w) or "strained" (eq. 6, the strain fitted within ``strain_radius`` particle sizes;
+    :meth:`step` then needs the particles' velocities).  Call :meth:`step` once per
+    coupling step.
     """
 
     def __init__(self, substrate, k_f: float, rho_f: float, c_f: float,
                  axis: int = -1, level: float | None = None,
                  side: int = 1, wet_fraction: float = 0.5, period=None, lo=None,
                  n_gauss: int = 4, wetting: str = "contact-layer", contact_gap: float = 1.0,
-                 stay_gap: float = 2.0):
+                 stay_gap: float = 2.0, layer: str = "stagnant",
+                 strain_radius: float = 3.0):
         self.sub = substrate
         self.k_f, self.rho_f, self.c_f = float(k_f), float(rho_f), float(c_f)
         self.alpha_f = self.k_f / (self.rho_f * self.c_f)
@@ -192,6 +317,14 @@ class ContactHeatInterface:
             raise ValueError(f"ContactHeatInterface: wetting must be one of {WETTING}, "
                              f"got {wetting!r}")
         self.wetting = wetting
+        if layer not in LAYERS:
+            raise ValueError(f"ContactHeatInterface: layer must be one of {LAYERS}, "
+                             f"got {layer!r}")
+        self.layer = layer
+        if not strain_radius > 0.0:
+            raise ValueError(f"ContactHeatInterface: strain_radius must be > 0, "
+                             f"got {strain_radius!r}")
+        self.strain_radius = float(strain_radius)
         self.contact_gap = float(contact_gap)
         self.stay_gap = max(float(stay_gap), self.contact_gap)
         self.period = (np.zeros(self.dim) if period is None
@@ -208,6 +341,8 @@ class ContactHeatInterface:
         n = self.X.shape[0]
         self.t = 0.0
         self.t_wet = np.full(n, np.nan)   #: wetting time per surface node (nan: dry)
+        self.s2 = np.full(n, np.nan)      #: strained layer's s^2 per node (eq. 6; nan: dry)
+        self.strain = np.zeros(n)         #: the last step's strain a per node [1/s]
         self.heat_to_substrate = 0.0      #: sum of the substrate's F dt [J]
         self.heat_from_fluid = 0.0        #: sum of the particles' dE [J]
         self.steps = 0
@@ -356,12 +491,54 @@ class ContactHeatInterface:
             return np.where(phi > 0, self.k_f * mean_inv_sqrt
                             / (math.sqrt(math.pi * self.alpha_f) * phi), 0.0)
 
-    def step(self, x, T, vol, dt: float, h=None) -> np.ndarray:
+    def strained_conductance(self, s2, tau0, a, dt, rows, cols, w, z, h, n_nodes):
+        """h_a of eq. (4) with the strained layer (6): k_f <1/s>_step / (sqrt(pi)
+        Phi_a(s_n)), s_n = sqrt(s2) the layer at the start of the step (0: wetted at
+        tau0 inside it), <1/s> the step mean of :func:`strained_mean_inv_s`."""
+        s_n = np.sqrt(np.maximum(s2, 0.0))
+        lo = np.maximum(z[cols] - 0.5 * h[cols], 0.0)
+        hi = np.maximum(z[cols] + 0.5 * h[cols], lo + 1e-12 * h[cols])
+        phi = np.bincount(rows, weights=w * cell_mean_erf(lo, hi, s_n[rows]),
+                          minlength=n_nodes)
+        inv_s = strained_mean_inv_s(s2, a, self.alpha_f, tau0, dt)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            return np.where(phi > 0, self.k_f * inv_s / (math.sqrt(math.pi) * phi), 0.0)
+
+    def node_strain(self, x, v, h, cols, wet) -> np.ndarray:
+        """Strain a = div_wall u_par per surface node (zero on dry nodes and where the fit
+        of :func:`surface_divergence` over the contact layer ``cols`` is singular)."""
+        a = np.zeros(self.X.shape[0])
+        idx = np.flatnonzero(wet)
+        part = np.unique(cols)
+        if idx.size == 0 or part.size == 0:
+            return a
+        lat = [c for c in range(self.dim) if c != self.axis]
+        yp = x[np.ix_(part, lat)]
+        up = np.asarray(v, float)[np.ix_(part, lat)]
+        if self.sub.axisymmetric:
+            up = np.where(yp < 0.0, -up, up)
+            yp = np.abs(yp)
+        for c, ax in enumerate(lat):  # periodic axes: samples within reach on both sides
+            if self.period[ax] > 0:
+                P = self.period[ax]
+                yp = np.vstack([yp, yp + P * np.eye(len(lat))[c], yp - P * np.eye(len(lat))[c]])
+                up = np.vstack([up, up, up])
+        R = self.strain_radius * float(np.mean(h[part]))
+        div = surface_divergence(yp, up, self.X[np.ix_(idx, lat)], R,
+                                 axisymmetric=self.sub.axisymmetric)
+        a[idx] = np.nan_to_num(div)
+        return a
+
+    def step(self, x, T, vol, dt: float, h=None, v=None) -> np.ndarray:
         """Exchange heat over ``dt`` between the particles (positions ``x`` (n, dim),
-        temperatures ``T`` [K], volumes ``vol``; fluid particles only) and the substrate,
-        whose temperature it advances (one :meth:`TransientHeat.step`).  Returns the heat
-        each particle loses [J] (eq. 5): apply it as T_i -= dE_i / (m_i c_i)."""
+        temperatures ``T`` [K], volumes ``vol``, velocities ``v`` (n, dim), needed by the
+        strained layer; fluid particles only) and the substrate, whose temperature it
+        advances (one :meth:`TransientHeat.step`).  Returns the heat each particle loses
+        [J] (eq. 5): apply it as T_i -= dE_i / (m_i c_i)."""
         T = np.asarray(T, float)
+        if self.layer == "strained" and v is None:
+            raise ValueError('ContactHeatInterface.step: layer = "strained" needs the '
+                             "particles' velocities v")
         was_wet = ~np.isnan(self.t_wet)
         key = (np.array(x, float, copy=True), np.array(vol, float, ndmin=1, copy=True),
                None if h is None else np.array(h, float, ndmin=1, copy=True), was_wet)
@@ -382,7 +559,18 @@ class ContactHeatInterface:
         self.t_wet[~wet] = np.nan
         t_w = np.where(wet, self.t - np.nan_to_num(self.t_wet), 0.0)
         T_f = np.bincount(rows, weights=w * T[cols], minlength=nX)
-        hA = np.where(wet, self.conductance(t_w, dt, rows, cols, w, z, hh, nX), 0.0)
+        if self.layer == "strained":
+            tau0 = np.clip(-t_w, 0.0, dt)  # wetted inside the step: from t_wet on
+            self.s2[newly] = 0.0
+            self.s2[~wet] = np.nan
+            s2 = np.where(wet, np.nan_to_num(self.s2), 0.0)
+            self.strain = self.node_strain(np.asarray(x, float), v, hh, cols, wet)
+            hA = np.where(wet, self.strained_conductance(s2, tau0, self.strain, dt, rows,
+                                                         cols, w, z, hh, nX), 0.0)
+            self.s2 = np.where(wet, strained_layer_s2(s2, self.strain, self.alpha_f,
+                                                      dt - tau0), np.nan)
+        else:
+            hA = np.where(wet, self.conductance(t_w, dt, rows, cols, w, z, hh, nX), 0.0)
         hA = hA * self.sub.surface_area
         Ts0 = self.sub.surface_temperature()
         T_ext = np.where(wet, T_f, Ts0)
