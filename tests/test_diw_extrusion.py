@@ -97,6 +97,7 @@ def test_emitted_volume_matches_flux(straight_bead):
     scene, path, res = straight_bead
     info = res.info
     assert info["stopped_reason"] is None
+    assert info["particles"]["leaked"] == 0  # no ink above the outlet outside the bore
     dx = info["dx"]
     layer = info["bore_points"] * dx**3
     Qt = info["expected_emitted_volume_m3"]

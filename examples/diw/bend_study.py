@@ -6,9 +6,11 @@ resolution, the particles, steps, mean step, wall seconds and the deviation of t
 from the desired path in nozzle diameters (sphfem.diw.fitness), plus the corner overshoot:
 how far the deposit reaches past the corner along the first leg's direction.
 
-    python examples/diw/bend_study.py [scene.toml] [D/dx ...]
+    python examples/diw/bend_study.py [scene.toml] [D/dx ...] [--out DIR]
 
-Importable: ``study(scene_path, ratios)`` returns the rows.
+With ``--out DIR``: each run's deposit (``<scene>_D<ratio>.npz``: positions, h, D) and a
+top view of all of them over the desired path (``<scene>_top.png``).  Importable:
+``study(scene_path, ratios, out)`` returns the rows.
 """
 
 from __future__ import annotations
@@ -17,6 +19,8 @@ import json
 import sys
 import tomllib
 from pathlib import Path
+
+import numpy as np
 
 from sphfem.diw.extrusion import simulate_deposit
 from sphfem.diw.fitness import deposit_fitness
@@ -38,15 +42,20 @@ def scene_at(path, ratio: float):
     return parse_scene(data, source=str(path))
 
 
-def run(path, ratio: float, out_dir=None) -> dict:
+def run(path, ratio: float, out=None) -> dict:
     scene = scene_at(path, ratio)
     desired, _ = named_case(scene.extrusion.toolpath)
     tool = Toolpath(desired, scene.extrusion.nozzle_speed)
-    res = simulate_deposit(scene, tool, out_dir=out_dir)
+    res = simulate_deposit(scene, tool)
     D = res.nozzle_diameter
     fit = deposit_fitness(res.positions, res.h, D, desired)
     info = res.info
     x = res.positions
+    npz = None
+    if out is not None:
+        Path(out).mkdir(parents=True, exist_ok=True)
+        npz = str(Path(out) / f"{scene.name}_D{ratio:g}.npz")
+        np.savez(npz, positions=x, h=res.h, D=D)
     return {
         "D_over_dx": ratio, "dx": info["dx"], "particles": info["particles"],
         "steps": info["steps"], "dt_mean_s": info["dt_s"]["mean"],
@@ -54,24 +63,61 @@ def run(path, ratio: float, out_dir=None) -> dict:
         "stopped_reason": info["stopped_reason"],
         "max_deviation_D": fit["max_dev_D"],
         "mean_deviation_D": fit["mean_dev_D"],
-        "corner_overshoot_D": float(x[:, 0].max() / D) if len(x) else None,
+        # bend90: the corner is at the origin after the leg along +x
+        "corner_overshoot_D": (float(x[:, 0].max() / D) if len(x) and
+                               scene.extrusion.toolpath == "bend90" else None),
         "fitness": fit["thesis"],
         "emitted_over_Qt": info["emitted_volume_m3"] / info["expected_emitted_volume_m3"],
         "controlling_limit_counts": info["controlling_limit_counts"],
+        "leaked": info["particles"].get("leaked"), "npz": npz,
     }
 
 
-def study(path, ratios=(4, 6, 8)):
+def study(path, ratios=(4, 6, 8), out=None):
     rows = []
     for r in ratios:
-        row = run(path, r)
+        row = run(path, r, out=out)
         print(json.dumps(row), flush=True)
         rows.append(row)
+    if out is not None:
+        top_view(path, rows, out)
     return rows
+
+
+def top_view(path, rows, out) -> Path:
+    """Deposits of ``rows`` (their npz files) over the desired path, top view."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    scene = scene_at(path, rows[0]["D_over_dx"])
+    desired, _ = named_case(scene.extrusion.toolpath)
+    line = desired.point(np.linspace(0.0, 1.0, 400))
+    fig, axes = plt.subplots(1, len(rows), figsize=(4.2 * len(rows), 4.2), squeeze=False)
+    for ax, row in zip(axes[0], rows, strict=True):
+        d = np.load(row["npz"])
+        x, D = d["positions"], float(d["D"])
+        ax.scatter(x[:, 0] * 1e3, x[:, 1] * 1e3, s=1.5, c=x[:, 2] / D, cmap="viridis")
+        ax.plot(line[:, 0] * 1e3, line[:, 1] * 1e3, "r--", lw=1)
+        ax.set_aspect("equal")
+        ax.set_title(f"D/dx = {row['D_over_dx']:g}: max dev {row['max_deviation_D']:.2f} D")
+        ax.set_xlabel("x [mm]")
+    axes[0][0].set_ylabel("y [mm]")
+    fig.tight_layout()
+    png = Path(out) / f"{scene.name}_top.png"
+    fig.savefig(png, dpi=110)
+    plt.close(fig)
+    return png
 
 
 if __name__ == "__main__":
     args = sys.argv[1:]
+    out = None
+    if "--out" in args:
+        i = args.index("--out")
+        out = args[i + 1]
+        del args[i:i + 2]
     scene_path = args[0] if args and args[0].endswith(".toml") else HERE / "bend90.toml"
     ratios = [float(a) for a in args if not a.endswith(".toml")] or [4, 6, 8]
-    study(scene_path, ratios)
+    study(scene_path, ratios, out)

@@ -413,6 +413,9 @@ def simulate_deposit(scene, path, out_dir=None) -> DepositResult:
     ps = ctx.particles
     fl = ps.kind == FLUID
     below = fl & (ps.x[:, 2] < noz.z_out)
+    Pend = noz.P(t)
+    r_axis = np.hypot(ps.x[:, 0] - Pend[0], ps.x[:, 1] - Pend[1])
+    leaked = fl & (ps.x[:, 2] >= noz.z_out) & (r_axis > 0.5 * noz.D + 0.5 * scene.sph.dx)
     t_ext = min(t, noz.duration)
     vol = dx**3
     n_fill = noz.n_fill * noz.disc.shape[0]
@@ -426,7 +429,8 @@ def simulate_deposit(scene, path, out_dir=None) -> DepositResult:
         "t_end_s": t,
         "dx": dx,
         "particles": {"ink": int(fl.sum()), "deposited": int(below.sum()),
-                      "walls": int((ps.kind == WALL).sum()), "total": int(ps.n)},
+                      "walls": int((ps.kind == WALL).sum()), "total": int(ps.n),
+                      "leaked": int(leaked.sum())},
         "flow_rate_m3_per_s": noz.Q,
         "piston_speed_m_per_s": noz.U_b,
         "bore_points": int(noz.disc.shape[0]),
