@@ -133,6 +133,15 @@ HEAT_SECTION = Section("heat", (
           doc="a surface node becomes wetted when the footprints of the fluid's first cell "
               "layer (coupling.heat_interface) cover this fraction of its area; it stays "
               "wetted while the fluid within two cells of the wall covers any of it"),
+    Param("layer", str, "stagnant", choices=("stagnant", "strained"), when=("model", _FEM),
+          doc="the fluid's thermal layer in the contact closure: \"stagnant\" (grows as "
+              "sqrt(alpha_f t) from wetting: exact for fluid at rest) or \"strained\" "
+              "(stretched by the wall-parallel flow, d(s^2)/dt = alpha_f - 2 a s^2 with a "
+              "the divergence of the wall layer's tangential velocity: a spreading "
+              "droplet; coupling.heat_interface eq. 6)"),
+    Param("strain_radius", float, 3.0, positive=True, when=("model", _FEM),
+          doc="radius of the least-squares fit of the wall layer's tangential velocity "
+              "that gives the strain of layer = \"strained\", in particle sizes"),
     Param("robin_tol", float, lambda dim: 1.0 if dim == 3 else 0.1, positive=True,
           when=("model", _FEM), default_doc="1.0 (3D), 0.1 (2D)",
           doc="refactorise the FEM matrix when a node's exchange conductance moved by more "
@@ -195,7 +204,8 @@ def build_substrate_heat(scene, cfg, ctx, region):
     period = np.asarray(ctx.period, float).copy()
     itf = ContactHeatInterface(heat, flu.k, flu.rho0, flu.c, axis=dim - 1, level=top,
                                side=1, wet_fraction=hcfg.wet_fraction, period=period,
-                               lo=np.asarray(ctx.lo, float))
+                               lo=np.asarray(ctx.lo, float), layer=hcfg.layer,
+                               strain_radius=hcfg.strain_radius)
     ps = ctx.particles
     fl = ps.kind == FLUID
     w = ps.m[fl] * ps.c_heat[fl]
@@ -240,6 +250,7 @@ class SubstrateHeat:
         self.impact_point = np.asarray(impact_point, float)
         self._locate = TensorProbe(heat.mesh)
         self._P_impact = self._locate(self.impact_point[None, :])
+        self._impact_node = int(np.argmin(np.linalg.norm(itf.X - self.impact_point, axis=1)))
         self.t_last: float | None = None
         self.q_ideal = 0.0
         self.history: list[dict] = []
@@ -281,7 +292,7 @@ class SubstrateHeat:
         t0 = time.perf_counter()
         dt = t - self.t_last
         x, vol = ps.x[f], ps.vol[f]
-        dE = self.itf.step(x, ps.T[f], vol, dt, h=self.dx)
+        dE = self.itf.step(x, ps.T[f], vol, dt, h=self.dx, v=ps.v[f])
         ps.T[f] -= dE / (ps.m[f] * ps.c_heat[f])
         self.t_last = t
         itf = self.itf
@@ -305,7 +316,8 @@ class SubstrateHeat:
                              "heat_to_substrate_J": itf.heat_to_substrate,
                              "ideal_contact_heat_J": self.q_ideal,
                              "wetted_nodes": int(wet.sum()),
-                             "wetted_area": float(itf.sub.surface_area[wet].sum())})
+                             "wetted_area": float(itf.sub.surface_area[wet].sum()),
+                             "strain_impact": float(itf.strain[self._impact_node])})
         self.timings["exchange"] += time.perf_counter() - t0
 
     def nodal_temperatures(self, targets) -> np.ndarray:

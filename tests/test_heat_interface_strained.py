@@ -16,6 +16,7 @@ from coupling.heat_interface import (
     strained_mean_inv_s,
     surface_divergence,
 )
+from coupling.strained_contact import strained_contact_fv
 from sphfem.fem.heat_transient import TransientHeat, graded_mesh
 
 WATER = (0.6, 1000.0, 4000.0)
@@ -78,62 +79,6 @@ def test_surface_divergence_too_few_samples_is_nan():
     assert np.isnan(div).all()
 
 
-def strained_conjugate_fv(a, t_out, T_f, T_s, fluid=WATER, solid=ALUMINA, L_f=20e-6,
-                          L_s=150e-6, h0=2e-9, growth=1.03):
-    """Independent reference: the 1D strained layer dT/dt + w dT/dz = alpha_f T_zz,
-    w = -a z, over z in [0, L_f] (T = T_f at the top, inflow) coupled at z = 0 to the
-    solid's conduction over [-L_s, 0] (insulated bottom), both at uniform temperature at
-    t = 0: finite volumes on grids graded from the interface (first cells h0, ratio
-    ``growth``), central convection, method of lines with Radau (rtol 1e-8).  Returns the
-    interface temperature and the heat into the solid [J/m^2] at the times ``t_out``."""
-    def faces(L):
-        f = [0.0]
-        d = h0
-        while f[-1] < L:
-            f.append(f[-1] + d)
-            d *= growth
-        return np.array(f)
-
-    ff, fs = faces(L_f), faces(L_s)
-    zf = 0.5 * (ff[1:] + ff[:-1])
-    zs = -0.5 * (fs[1:] + fs[:-1])
-    dzf, dzs = np.diff(ff), np.diff(fs)
-    kf, rf, cf = fluid
-    ks, rs, cs = solid
-    nf, ns = zf.size, zs.size
-
-    def rhs(t, y):
-        Tf, Ts = y[:nf], y[nf:]
-        # interface conductance through half cells
-        q0 = (Tf[0] - Ts[0]) / (0.5 * dzf[0] / kf + 0.5 * dzs[0] / ks)  # into the solid
-        # fluid: conduction fluxes upward at the faces ff[1:] (k dT/dz)
-        gf = np.empty(nf)
-        gf[:-1] = kf * (Tf[1:] - Tf[:-1]) / (zf[1:] - zf[:-1])
-        gf[-1] = kf * (T_f - Tf[-1]) / (ff[-1] - zf[-1])
-        dTf = (np.diff(np.concatenate([[q0], gf])) / (rf * cf * dzf))
-        Tup = np.concatenate([Tf[1:], [T_f]])
-        Tdn = np.concatenate([[Tf[0]], Tf[:-1]])  # first cell: one-sided upward difference
-        zup = np.concatenate([zf[1:], [ff[-1]]])
-        zdn = np.concatenate([[zf[0]], zf[:-1]])
-        dTdz = (Tup - Tdn) / (zup - zdn)
-        dTf += a * zf * dTdz  # -w dT/dz, w = -a z
-        # solid: conduction, downward coordinate; flux into cell 0 from the interface
-        gs = np.empty(ns)
-        gs[:-1] = ks * (Ts[:-1] - Ts[1:]) / (zs[:-1] - zs[1:])
-        gs[-1] = 0.0
-        dTs = (np.concatenate([[q0], gs[:-1]]) - gs) / (rs * cs * dzs)
-        return np.concatenate([dTf, dTs])
-
-    y0 = np.concatenate([np.full(nf, T_f), np.full(ns, T_s)])
-    sol = solve_ivp(rhs, (0.0, t_out[-1]), y0, method="Radau", t_eval=t_out, rtol=1e-8,
-                    atol=1e-10)
-    Tf0, Ts0 = sol.y[0], sol.y[nf]
-    gf, gs = kf / (0.5 * dzf[0]), ks / (0.5 * dzs[0])
-    Ti = (gf * Tf0 + gs * Ts0) / (gf + gs)
-    Q = rs * cs * (sol.y[nf:] - T_s).T @ dzs
-    return Ti, Q
-
-
 def _closure_run(a, t_end, dt, T_f, T_s, layer):
     """The interface + the FEM substrate under a stagnation-point flow: one row of large
     particles (size H >> the layer) held at T_f (a fully renewed wall cell) moving with
@@ -175,7 +120,7 @@ def test_conjugate_strained_contact_against_finite_volumes():
     t, Tw, Q, itf = _closure_run(a, t_end, dt, T_f, T_s, "strained")
     np.testing.assert_allclose(itf.strain[~np.isnan(itf.s2)], a, rtol=1e-9)
     pick = np.arange(9, t.size, 10)
-    Ti_ref, Q_ref = strained_conjugate_fv(a, t[pick], T_f, T_s)
+    Ti_ref, Q_ref = strained_contact_fv(a, t[pick], T_f, T_s, WATER, ALUMINA)
     rise_err = np.abs((Tw[pick] - T_s) / (Ti_ref - T_s) - 1)
     q_err = np.abs(Q[pick] / Q_ref - 1)
     assert rise_err.max() < 0.03
@@ -183,3 +128,14 @@ def test_conjugate_strained_contact_against_finite_volumes():
     _, Tw0, _, _ = _closure_run(a, t_end, dt, T_f, T_s, "stagnant")
     stagnant_err = abs((Tw0[pick][-1] - T_s) / (Ti_ref[-1] - T_s) - 1)
     assert stagnant_err > 0.3
+
+
+def test_strained_contact_reference_without_strain_is_the_closed_form():
+    """a = 0: the finite-volume reference against Carslaw & Jaeger's contact solution."""
+    from coupling.heat_interface import contact_solution
+
+    t = np.array([1e-7, 1e-6, 1e-5])
+    Ti, Q = strained_contact_fv(0.0, t, 373.15, 293.15, WATER, ALUMINA)
+    Ti_ex, _, Q_ex = contact_solution(t, 373.15, 293.15, *WATER, *ALUMINA)
+    np.testing.assert_allclose((Ti - 293.15) / (Ti_ex - 293.15), 1.0, atol=1e-4)
+    np.testing.assert_allclose(Q / Q_ex, 1.0, atol=1e-3)
