@@ -148,7 +148,9 @@ class Nozzle:
         self.emissions = 0
         self.min_gap = math.inf  # least pair distance among bore particles at emission
         self.target_t = None  # time the nozzle moves to at the next drift
-        self._t_from = 0.0
+        self.t_pos = 0.0  # time of the tube's and buffer's current positions
+        self.drift_fraction = 1.0  # of a step, where the ink's drift leaves it (set_velocities)
+        self.emit_in_drift = True  # emit inside the drift (projection) or between steps
         self.mu_ink = None  # a Newtonian ink's mu for released particles (else the rheology's)
         self.gravity = np.zeros(3)  # acceleration of a released particle until evaluated
 
@@ -188,29 +190,41 @@ class Nozzle:
 
     # -- stepping ------------------------------------------------------------------------
     def set_velocities(self, ps: ParticleSet, t: float, dt: float) -> None:
-        """Velocity of the tube and buffer particles over the step [t, t + dt] (midpoint)."""
+        """Velocity of the tube and buffer particles over the step [t, t + dt] (midpoint),
+        and the time of the ink's drifted positions (``drift_fraction`` of the step: 1 for
+        a projection step, 1/2 for the symplectic predictor), where :meth:`move` puts the
+        nozzle."""
         vm = self.V(t + 0.5 * dt)
         role = ps.role
         ps.v[role == TUBE] = vm
         vb = vm.copy()
         vb[2] -= self.piston(t + 0.5 * dt)
         ps.v[role == BUFFER] = vb
-        self.target_t = t + dt
-        self._t_from = t
+        self.target_t = t + self.drift_fraction * dt
 
-    def move(self, ps: ParticleSet) -> bool:
-        """Move the nozzle to ``target_t``, release the buffer layer that crossed z_r and
-        add a layer on top; True when particles were appended."""
-        if self.target_t is None:
-            return False
-        t1, t0 = self.target_t, self._t_from
-        self.target_t = None
-        role = ps.role
-        buf = role == BUFFER
-        # the piston's travel over the step (midpoint speed, as its velocity)
-        ps.offset[buf, 2] -= (t1 - t0) * self.piston(0.5 * (t0 + t1))
-        moving = (role == TUBE) | buf
-        ps.x[moving] = self.P(t1) + ps.offset[moving]
+    def travel(self, t0: float, t1: float) -> float:
+        """Distance the piston moves down the bore between ``t0`` and ``t1``."""
+        T = self.duration
+        return self.U_b * (min(t1, T) - min(t0, T))
+
+    def move(self, ps: ParticleSet, emit: bool = True) -> bool:
+        """Move the nozzle to ``target_t`` (if set) and, with ``emit``, release the buffer
+        layer that crossed z_r and add a layer on top; True when particles were appended."""
+        if self.target_t is not None:
+            t1 = self.target_t
+            self.target_t = None
+            buf = ps.role == BUFFER
+            ps.offset[buf, 2] -= self.travel(self.t_pos, t1)
+            moving = (ps.role == TUBE) | buf
+            ps.x[moving] = self.P(t1) + ps.offset[moving]
+            self.t_pos = t1
+        return self.emit(ps) if emit else False
+
+    def emit(self, ps: ParticleSet) -> bool:
+        """Release the buffer layer whose centre passed z_r (it becomes ink) and add a new
+        layer dx above the top one; True when particles were appended."""
+        t1 = self.t_pos
+        buf = ps.role == BUFFER
         zr = self.z_r - self.z0
         out = buf & (ps.offset[:, 2] < zr)
         if not out.any():
@@ -261,7 +275,7 @@ class _NozzleService:
 
     def __call__(self, rebuild: bool) -> None:
         ps = self.ctx.particles
-        appended = self.nozzle.move(ps)
+        appended = self.nozzle.move(ps, emit=self.nozzle.emit_in_drift)
         moving = (ps.role == TUBE) | (ps.role == BUFFER)
         if not (rebuild or appended) and self.ref is not None and self.ref.shape[0] == int(
                 moving.sum()):
@@ -356,6 +370,13 @@ def simulate_deposit(scene, path, out_dir=None) -> DepositResult:
                          np.zeros(3), params, kernel=scene.sph.kernel)
     noz.mu_ink = (mat.mu or 0.0) if params.rheology == "newtonian" else None
     noz.gravity = solver.gravity.copy()
+    # a projection step drifts once, to t + dt, and keeps no mid-step state: the nozzle
+    # emits inside the drift, so the evaluation at x^{n+1} sees the new ink; the symplectic
+    # WCSPH step drifts to t + dt/2 and keeps per-particle mid-step state (v_n, rho_n),
+    # so there the nozzle emits between steps and the forces are evaluated again
+    eos = solver.pressure_method.eos
+    noz.drift_fraction = 0.5 if eos else 1.0
+    noz.emit_in_drift = not eos
     ctx = solver.ctx
     service = _NozzleService(ctx, ctx.provide, noz, params.skin)
     ctx.provide = service
@@ -401,6 +422,9 @@ def simulate_deposit(scene, path, out_dir=None) -> DepositResult:
             stopped = str(e)
             break
         t = solver.t
+        if not noz.emit_in_drift and noz.emit(ctx.particles):
+            solver.rebuild_neighbors()
+            solver.evaluate(t)
         dts.append(dt)
         below = (ctx.particles.kind == FLUID) & (ctx.particles.x[:, 2] < noz.z_out)
         history["t"].append(t)
