@@ -65,7 +65,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit, prange
 
-from sphfem.fluid.passes import grad_factor
+from sphfem.fluid.passes import NBLOCKS, _block, grad_factor
 from sphfem.kernels import FASTMATH, kernel_dfdq, kernel_f, kernel_sigma
 from sphfem.particles import FLUID, WALL
 from sphfem.smallmat import pair_sep
@@ -86,33 +86,35 @@ def pairs_and_density(x, kind, M, offsets, indices, R, sigma, kernel_code, perio
     periodic = False
     for k in range(dim):
         periodic |= period[k] > 0.0
-    for i in prange(n):
-        ki = kind[i]
-        o = offsets[i]
-        c = 0
-        s = M[i] * sigma * kernel_f(0.0, kernel_code)
-        if ki == FLUID or ki == WALL:
-            for jj in range(o, offsets[i + 1]):
-                j = indices[jj]
-                kj = kind[j]
-                if not (kj == FLUID or (ki == FLUID and kj == WALL)):
-                    continue
-                r0, r1, r2 = pair_sep(x, i, j, dim, period, periodic)
-                d2 = r0 * r0 + r1 * r1 + r2 * r2
-                if d2 >= R2 or d2 == 0.0:
-                    continue
-                d = np.sqrt(d2)
-                F = grad_factor(d, R, fac2, kernel_code)
-                nbj[o + c] = j
-                rr = (r0, r1, r2)
-                for k in range(dim):
-                    grad[o + c, k] = F * rr[k]
-                wj = sigma * kernel_f(d / R, kernel_code)
-                wgt[o + c] = wj
-                s += M[j] * wj
-                c += 1
-        cnt[i] = c
-        rho[i] = s if ki == FLUID else 0.0
+    for blk in prange(NBLOCKS):  # blocks of equal list length (see _block)
+        lo, hi = _block(blk, offsets)
+        for i in range(lo, hi):
+            ki = kind[i]
+            o = offsets[i]
+            c = 0
+            s = M[i] * sigma * kernel_f(0.0, kernel_code)
+            if ki == FLUID or ki == WALL:
+                for jj in range(o, offsets[i + 1]):
+                    j = indices[jj]
+                    kj = kind[j]
+                    if not (kj == FLUID or (ki == FLUID and kj == WALL)):
+                        continue
+                    r0, r1, r2 = pair_sep(x, i, j, dim, period, periodic)
+                    d2 = r0 * r0 + r1 * r1 + r2 * r2
+                    if d2 >= R2 or d2 == 0.0:
+                        continue
+                    d = np.sqrt(d2)
+                    F = grad_factor(d, R, fac2, kernel_code)
+                    nbj[o + c] = j
+                    rr = (r0, r1, r2)
+                    for k in range(dim):
+                        grad[o + c, k] = F * rr[k]
+                    wj = sigma * kernel_f(d / R, kernel_code)
+                    wgt[o + c] = wj
+                    s += M[j] * wj
+                    c += 1
+            cnt[i] = c
+            rho[i] = s if ki == FLUID else 0.0
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
@@ -123,56 +125,58 @@ def diagonal(M, kind, offsets, nbj, grad, cnt, A):
     deficient (s_F ~ -1.5 s_W), and is then dropped: a larger diagonal only under-relaxes
     the Jacobi step, a vanishing one made it blow up (a 3 MPa spike at the 2D dam break's
     wall)."""
-    n = kind.shape[0]
     dim = grad.shape[1]
-    for i in prange(n):
-        A[i] = 0.0
-        if kind[i] != FLUID:
-            continue
-        o = offsets[i]
-        f0 = 0.0
-        f1 = 0.0
-        f2 = 0.0
-        w0 = 0.0
-        w1 = 0.0
-        w2 = 0.0
-        self_sum = 0.0
-        for k in range(cnt[i]):
-            j = nbj[o + k]
-            g0 = grad[o + k, 0]
-            g1 = grad[o + k, 1] if dim > 1 else 0.0
-            g2 = grad[o + k, 2] if dim > 2 else 0.0
-            if kind[j] == FLUID:
-                f0 += M[j] * g0
-                f1 += M[j] * g1
-                f2 += M[j] * g2
-                self_sum += M[i] * M[j] * (g0 * g0 + g1 * g1 + g2 * g2)
-            else:
-                w0 += M[j] * g0
-                w1 += M[j] * g1
-                w2 += M[j] * g2
-        cross = ((f0 + 2.0 * w0) * (f0 + w0) + (f1 + 2.0 * w1) * (f1 + w1)
-                 + (f2 + 2.0 * w2) * (f2 + w2))
-        A[i] = self_sum + (cross if cross > 0.0 else 0.0)
+    for blk in prange(NBLOCKS):  # blocks of equal list length (see _block)
+        lo, hi = _block(blk, offsets)
+        for i in range(lo, hi):
+            A[i] = 0.0
+            if kind[i] != FLUID:
+                continue
+            o = offsets[i]
+            f0 = 0.0
+            f1 = 0.0
+            f2 = 0.0
+            w0 = 0.0
+            w1 = 0.0
+            w2 = 0.0
+            self_sum = 0.0
+            for k in range(cnt[i]):
+                j = nbj[o + k]
+                g0 = grad[o + k, 0]
+                g1 = grad[o + k, 1] if dim > 1 else 0.0
+                g2 = grad[o + k, 2] if dim > 2 else 0.0
+                if kind[j] == FLUID:
+                    f0 += M[j] * g0
+                    f1 += M[j] * g1
+                    f2 += M[j] * g2
+                    self_sum += M[i] * M[j] * (g0 * g0 + g1 * g1 + g2 * g2)
+                else:
+                    w0 += M[j] * g0
+                    w1 += M[j] * g1
+                    w2 += M[j] * g2
+            cross = ((f0 + 2.0 * w0) * (f0 + w0) + (f1 + 2.0 * w1) * (f1 + w1)
+                     + (f2 + 2.0 * w2) * (f2 + w2))
+            A[i] = self_sum + (cross if cross > 0.0 else 0.0)
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
 def density_rate(u, M, kind, offsets, nbj, grad, cnt, out):
     """out_i = sum_j M_j (u_i - u_j) . g_ij of fluid rows (wall rows of ``u``: the walls'
     velocities, or zeros for a pressure acceleration); 0 elsewhere."""
-    n = kind.shape[0]
     dim = grad.shape[1]
-    for i in prange(n):
-        s = 0.0
-        if kind[i] == FLUID:
-            o = offsets[i]
-            for k in range(cnt[i]):
-                j = nbj[o + k]
-                d = 0.0
-                for c in range(dim):
-                    d += (u[i, c] - u[j, c]) * grad[o + k, c]
-                s += M[j] * d
-        out[i] = s
+    for blk in prange(NBLOCKS):  # blocks of equal list length (see _block)
+        lo, hi = _block(blk, offsets)
+        for i in range(lo, hi):
+            s = 0.0
+            if kind[i] == FLUID:
+                o = offsets[i]
+                for k in range(cnt[i]):
+                    j = nbj[o + k]
+                    d = 0.0
+                    for c in range(dim):
+                        d += (u[i, c] - u[j, c]) * grad[o + k, c]
+                    s += M[j] * d
+            out[i] = s
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
@@ -180,27 +184,28 @@ def pressure_acceleration(q, M, kind, offsets, nbj, grad, cnt, scale, out, accum
     """out_i (+)= scale a_i(q) of fluid rows, a_i(q) = -sum_j M_j (q_i + q_j) g_ij over fluid
     and wall neighbours (q = p / rho^2; a wall's q_b from :func:`wall_extrapolate`); rows
     of other kinds are zeroed unless ``accumulate``."""
-    n = kind.shape[0]
     dim = grad.shape[1]
-    for i in prange(n):
-        a0 = 0.0
-        a1 = 0.0
-        a2 = 0.0
-        if kind[i] == FLUID:
-            o = offsets[i]
-            for k in range(cnt[i]):
-                j = nbj[o + k]
-                f = -M[j] * (q[i] + q[j])
-                a0 += f * grad[o + k, 0]
-                if dim > 1:
-                    a1 += f * grad[o + k, 1]
-                if dim > 2:
-                    a2 += f * grad[o + k, 2]
-        elif accumulate:
-            continue
-        a = (a0, a1, a2)
-        for c in range(dim):
-            out[i, c] = out[i, c] + scale * a[c] if accumulate else scale * a[c]
+    for blk in prange(NBLOCKS):  # blocks of equal list length (see _block)
+        lo, hi = _block(blk, offsets)
+        for i in range(lo, hi):
+            a0 = 0.0
+            a1 = 0.0
+            a2 = 0.0
+            if kind[i] == FLUID:
+                o = offsets[i]
+                for k in range(cnt[i]):
+                    j = nbj[o + k]
+                    f = -M[j] * (q[i] + q[j])
+                    a0 += f * grad[o + k, 0]
+                    if dim > 1:
+                        a1 += f * grad[o + k, 1]
+                    if dim > 2:
+                        a2 += f * grad[o + k, 2]
+            elif accumulate:
+                continue
+            a = (a0, a1, a2)
+            for c in range(dim):
+                out[i, c] = out[i, c] + scale * a[c] if accumulate else scale * a[c]
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
@@ -208,17 +213,18 @@ def wall_extrapolate(q, kind, offsets, nbj, wgt, cnt):
     """q_b = sum_f q_f W_bf / sum_f W_bf on wall rows (0 without fluid neighbours): the
     wall particles' pressure (over rho^2) extrapolated from the fluid, the p-dependent part
     of Adami et al. (2012, eq. 27); fluid rows are left alone."""
-    n = kind.shape[0]
-    for b in prange(n):
-        if kind[b] != WALL:
-            continue
-        o = offsets[b]
-        sw = 0.0
-        sq = 0.0
-        for k in range(cnt[b]):
-            sw += wgt[o + k]
-            sq += q[nbj[o + k]] * wgt[o + k]
-        q[b] = sq / sw if sw > 0.0 else 0.0
+    for blk in prange(NBLOCKS):  # blocks of equal list length (see _block)
+        lo, hi = _block(blk, offsets)
+        for b in range(lo, hi):
+            if kind[b] != WALL:
+                continue
+            o = offsets[b]
+            sw = 0.0
+            sq = 0.0
+            for k in range(cnt[b]):
+                sw += wgt[o + k]
+                sq += q[nbj[o + k]] * wgt[o + k]
+            q[b] = sq / sw if sw > 0.0 else 0.0
 
 
 @njit(cache=True, parallel=True)
@@ -244,43 +250,46 @@ def wall_hydrostatic_q(x, rho, acc, kind, offsets, nbj, wgt, cnt, gravity, perio
     periodic = False
     for k in range(dim):
         periodic |= period[k] > 0.0
-    for b in prange(n):
-        qh[b] = 0.0
-        if kind[b] != WALL:
-            continue
-        o = offsets[b]
-        sw = 0.0
-        sh = 0.0
-        for k in range(cnt[b]):
-            f = nbj[o + k]
-            r0, r1, r2 = pair_sep(x, f, b, dim, period, periodic)  # x_b - x_f
-            h = (gravity[0] - acc[b, 0]) * r0
-            if dim > 1:
-                h += (gravity[1] - acc[b, 1]) * r1
-            if dim > 2:
-                h += (gravity[2] - acc[b, 2]) * r2
-            sw += wgt[o + k]
-            sh += rho[f] * h * wgt[o + k]
-        qh[b] = sh / (sw * rho0 * rho0) if sw > 0.0 else 0.0
+    for blk in prange(NBLOCKS):  # blocks of equal list length (see _block)
+        lo, hi = _block(blk, offsets)
+        for b in range(lo, hi):
+            qh[b] = 0.0
+            if kind[b] != WALL:
+                continue
+            o = offsets[b]
+            sw = 0.0
+            sh = 0.0
+            for k in range(cnt[b]):
+                f = nbj[o + k]
+                r0, r1, r2 = pair_sep(x, f, b, dim, period, periodic)  # x_b - x_f
+                h = (gravity[0] - acc[b, 0]) * r0
+                if dim > 1:
+                    h += (gravity[1] - acc[b, 1]) * r1
+                if dim > 2:
+                    h += (gravity[2] - acc[b, 2]) * r2
+                sw += wgt[o + k]
+                sh += rho[f] * h * wgt[o + k]
+            qh[b] = sh / (sw * rho0 * rho0) if sw > 0.0 else 0.0
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
 def wall_reaction(q, m, M, kind, offsets, nbj, grad, cnt, f):
     """f_b = -sum_i m_i M_b (q_i + q_b) g_bi on wall rows b: the exact negative of the wall
     terms of m_i a_i(q) (fluid rows left alone)."""
-    n = kind.shape[0]
     dim = grad.shape[1]
-    for b in prange(n):
-        if kind[b] != WALL:
-            continue
-        o = offsets[b]
-        for c in range(dim):
-            f[b, c] = 0.0
-        for k in range(cnt[b]):
-            i = nbj[o + k]
-            s = -m[i] * M[b] * (q[i] + q[b])
+    for blk in prange(NBLOCKS):  # blocks of equal list length (see _block)
+        lo, hi = _block(blk, offsets)
+        for b in range(lo, hi):
+            if kind[b] != WALL:
+                continue
+            o = offsets[b]
             for c in range(dim):
-                f[b, c] += s * grad[o + k, c]
+                f[b, c] = 0.0
+            for k in range(cnt[b]):
+                i = nbj[o + k]
+                s = -m[i] * M[b] * (q[i] + q[b])
+                for c in range(dim):
+                    f[b, c] += s * grad[o + k, c]
 
 
 def lattice_sum(kernel_code: int, dim: int, R_over_dx: float) -> float:
