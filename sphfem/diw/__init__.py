@@ -36,4 +36,5 @@ The fitness reads only ``positions[:, :2]`` (projection on the substrate), ``h``
 ``nozzle_diameter``; a non-None ``stopped_reason`` marks a failed evaluation.
 """
 
+from sphfem.diw import optimize_section as _optimize_section  # noqa: E402, F401  (registers [optimize])
 from sphfem.diw import scene_section as _scene_section  # noqa: E402, F401  (registers [extrusion])
