@@ -1,4 +1,4 @@
-"""Command line: ``sphfem run | validate | bench``.
+"""Command line: ``sphfem run | validate | bench | optimize``.
 
 Exit codes: 0 success, 1 a validation case failed its criteria or a run stopped on a
 stability guard, 2 usage errors (bad arguments, malformed scene, existing output folder).
@@ -68,6 +68,19 @@ def _parser() -> argparse.ArgumentParser:
                    help="benchmark: neighbors | density | dambreak2d | dambreak3d | droplet3d")
     b.add_argument("--json", metavar="FILE", help="write the figures as JSON")
     b.add_argument("--quick", action="store_true", help="small sizes (for smoke tests)")
+
+    o = sub.add_parser("optimize", help="optimise a direct-ink-writing toolpath on Dask",
+                       description="Toolpath optimisation of an extrusion scene (issue 18, "
+                                   "docs/diw.md): one Dask task per evaluation, cached.")
+    o.add_argument("scene", help="extrusion scene (.toml) with an optional [optimize] section")
+    o.add_argument("--out", required=True, help="output folder (cache, history, report)")
+    o.add_argument("--scheduler", metavar="ADDRESS", help="Dask scheduler (default: a "
+                   "LocalCluster of --workers processes)")
+    o.add_argument("--workers", type=int, default=1, help="LocalCluster workers (default 1)")
+    o.add_argument("--budget", type=int, help="evaluations (overrides [optimize] budget)")
+    o.add_argument("--method", choices=("pso", "cma", "de"), help="overrides [optimize]")
+    o.add_argument("--resume", action="store_true", help="continue in an existing --out")
+    o.add_argument("--no-progress", action="store_true", help="hide the progress bar")
 
     sub.add_parser("mesh", help="write a gmsh substrate mesh (sphfem mesh block --help)",
                    add_help=False)
@@ -220,6 +233,16 @@ def _cmd_run(args) -> int:
     return EXIT_OK
 
 
+def _cmd_optimize(args) -> int:
+    from sphfem.diw.driver import command
+    from sphfem.errors import OutputExistsError, SceneError
+
+    try:
+        return command(args)
+    except (SceneError, OutputExistsError) as e:
+        raise UsageError(str(e)) from None
+
+
 def main(argv=None) -> int:
     parser = _parser()
     argv = sys.argv[1:] if argv is None else list(argv)
@@ -236,7 +259,8 @@ def main(argv=None) -> int:
     if args.command is None:
         parser.print_help()
         return EXIT_USAGE
-    handler = {"run": _cmd_run, "validate": _cmd_validate, "bench": _cmd_bench}[args.command]
+    handler = {"run": _cmd_run, "validate": _cmd_validate, "bench": _cmd_bench,
+               "optimize": _cmd_optimize}[args.command]
     try:
         return handler(args)
     except UsageError as e:
