@@ -16,6 +16,7 @@ top view of all of them over the desired path (``<scene>_top.png``).  Importable
 from __future__ import annotations
 
 import json
+import resource
 import sys
 import tomllib
 from pathlib import Path
@@ -70,6 +71,8 @@ def run(path, ratio: float, out=None) -> dict:
         "emitted_over_Qt": info["emitted_volume_m3"] / info["expected_emitted_volume_m3"],
         "controlling_limit_counts": info["controlling_limit_counts"],
         "leaked": info["particles"].get("leaked"), "npz": npz,
+        # peak resident memory of this process so far (runs in one process: the largest)
+        "max_rss_MB": round(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024, 1),
     }
 
 
