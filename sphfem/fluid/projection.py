@@ -501,8 +501,9 @@ def finish(solver, state: ProjectionState, q: np.ndarray) -> None:
     p.p[wall] = solver.params.rho0 ** 2 * q[wall]  # the pressure the solve gave the walls
     f = w.f
     wall_reaction(q, p.m, w.M, p.kind, nl.offsets, w.nbj, w.grad, w.cnt, f)
-    state.reaction_ids = p.id[wall].copy()
-    state.reaction = f[wall].copy()
+    keep = wall & (w.cnt > 0)  # the other wall rows have f = 0
+    state.reaction_ids = p.id[keep].copy()
+    state.reaction = f[keep].copy()
 
 
 def add_reaction(solver, state: ProjectionState | None) -> None:
@@ -511,10 +512,10 @@ def add_reaction(solver, state: ProjectionState | None) -> None:
     if state is None or state.reaction is None or state.reaction.shape[0] == 0:
         return
     p = solver.p
-    wall = np.flatnonzero(p.kind == WALL)
-    ids = p.id[wall]
-    order = np.argsort(state.reaction_ids)
-    k = np.searchsorted(state.reaction_ids, ids, sorter=order)
-    k = np.minimum(k, order.shape[0] - 1)
-    hit = state.reaction_ids[order[k]] == ids
-    p.f_fluid[wall[hit]] += state.reaction[order[k[hit]]]
+    row = np.full(int(p.id.max()) + 1, -1, dtype=np.int64)  # id -> row of this step
+    row[p.id] = np.arange(p.n)
+    ids = state.reaction_ids
+    rows = np.where(ids < row.shape[0], row[np.minimum(ids, row.shape[0] - 1)], -1)
+    hit = rows >= 0
+    hit[hit] = p.kind[rows[hit]] == WALL
+    p.f_fluid[rows[hit]] += state.reaction[hit]
