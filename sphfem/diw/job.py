@@ -63,13 +63,14 @@ class ToolpathJob:
         """What a result depends on (hashed by :func:`sphfem.diw.evaluate.job_hash`)."""
         d = asdict(self)
         d.pop("source")
+        d.pop("lag_cost")  # a sleep: changes the time an evaluation takes, not its result
         scene = d.pop("scene_text")
         if scene is not None:
             data = tomllib.loads(scene)
             data.pop("optimize", None)  # its evaluation keys are fields of the job
             d["scene"] = data
         if self.evaluator != "lag-model":
-            for k in ("lag_time", "lag_damping", "lag_cost"):
+            for k in ("lag_time", "lag_damping"):
                 d.pop(k)
         return d
 
