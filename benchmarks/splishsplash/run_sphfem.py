@@ -5,8 +5,8 @@ positions, 4 x 3 x 1.5 m tank, rho0 = 1000, nu = 0.01 m^2/s, g = 9.81) with sphf
 ``pressure = "dfsph"`` or ``"iisph"``, the same density-error (and divergence-error)
 tolerance, and the same time-step rule: dt = min(0.4 (2r) / v_max, 5 ms) (SPlisHSPlasH's
 CFL with cflFactor 1 and cflMaxTimeStepSize; sphfem's ``cfl`` set to 0.4 (2r) / h).
-Axes: x along the tank, y across, z up (SPlisHSPlasH: y up).  Walls: 3 layers of wall
-particles on the tank's floor and four sides, open top (the flow stays below the 3 m lid
+Axes: x along the tank, y across, z up (SPlisHSPlasH: y up).  Walls: R / (2r) layers of
+wall particles on the tank's floor and four sides, open top (the flow stays below the 3 m lid
 within the timed 1 s).  Kernel: sphfem's Wendland C2 at R = 3 dx (the project setting) or,
 with ``--kernel cubic_spline --support 2``, SPlisHSPlasH's cubic spline at R = 4 r = 2 dx.
 
@@ -60,7 +60,7 @@ def build(method: str, radius: float, tol: float, tol_v: float, kernel: str,
     d = 2.0 * radius
     rho0, g = 1000.0, 9.81
     xf = block_positions(radius)
-    xw = box_walls(TANK_LO, TANK_HI, d, 3, open_top=True)
+    xw = box_walls(TANK_LO, TANK_HI, d, int(np.ceil(support - 1e-9)), open_top=True)
     ps = make_particles(xf, xw, d, rho0)
     R = support * d
     keys = {"dfsph": {"dfsph_tolerance": tol, "dfsph_divergence_tolerance": tol_v},
