@@ -122,6 +122,13 @@ stagnant closure in a strained flow reads a renewed, hot wall cell through a lay
 s = sqrt(alpha_f t_w) that keeps growing, infers T_inf too high by 1/Phi, and the
 impact-point temperature then rises with resolution (validation droplet-impact).
 
+On a no-slip wall the stretching flow is itself slowed inside the viscous layer, which a
+thermal layer of Pr ~ 1 shares: ``layer = "strained-viscous"`` reads the outer strain and
+the viscous length from the fitted strain of the wall cells through the Hiemenz / Homann
+stagnation-point profile and advances s by the energy integral of the erf profile in that
+flow (:mod:`coupling.stagnation_layer`, eq. 2'; exact at a = 0 and at the steady layer).
+It needs the fluid's kinematic viscosity ``nu_f``.
+
 What the model assumes (and where it is not exact): the fluid layer is the similarity
 solution from the wetting time (stagnant: a = 0; strained: (6) with the strain of the
 wall cell, which on a no-slip wall is the strain at half a cell's height: larger than
@@ -145,8 +152,9 @@ __all__ = ["ContactHeatInterface", "cell_mean_erf", "contact_solution",
 
 #: wetting criteria: "contact-layer" (eq. 2) or "chi" (the earlier height taper, eq. 2')
 WETTING = ("contact-layer", "chi")
-#: fluid-side layer models: "stagnant" (s^2 = alpha_f t_w) or "strained" (eq. 6)
-LAYERS = ("stagnant", "strained")
+#: fluid-side layer models: "stagnant" (s^2 = alpha_f t_w), "strained" (eq. 6) or
+#: "strained-viscous" (eq. 6 under the viscous stagnation-point layer, coupling.stagnation_layer)
+LAYERS = ("stagnant", "strained", "strained-viscous")
 
 
 def cell_mean_erf(a, b, s):
@@ -300,7 +308,7 @@ class ContactHeatInterface:
                  side: int = 1, wet_fraction: float = 0.5, period=None, lo=None,
                  n_gauss: int = 4, wetting: str = "contact-layer", contact_gap: float = 1.0,
                  stay_gap: float = 2.0, layer: str = "stagnant",
-                 strain_radius: float = 3.0):
+                 strain_radius: float = 3.0, nu_f: float | None = None):
         self.sub = substrate
         self.k_f, self.rho_f, self.c_f = float(k_f), float(rho_f), float(c_f)
         self.alpha_f = self.k_f / (self.rho_f * self.c_f)
@@ -325,6 +333,10 @@ class ContactHeatInterface:
             raise ValueError(f"ContactHeatInterface: strain_radius must be > 0, "
                              f"got {strain_radius!r}")
         self.strain_radius = float(strain_radius)
+        if layer == "strained-viscous" and not (nu_f is not None and nu_f > 0.0):
+            raise ValueError('ContactHeatInterface: layer = "strained-viscous" needs the '
+                             f"fluid's kinematic viscosity nu_f > 0, got {nu_f!r}")
+        self.nu_f = None if nu_f is None else float(nu_f)
         self.contact_gap = float(contact_gap)
         self.stay_gap = max(float(stay_gap), self.contact_gap)
         self.period = (np.zeros(self.dim) if period is None
@@ -491,16 +503,16 @@ class ContactHeatInterface:
             return np.where(phi > 0, self.k_f * mean_inv_sqrt
                             / (math.sqrt(math.pi * self.alpha_f) * phi), 0.0)
 
-    def strained_conductance(self, s2, tau0, a, dt, rows, cols, w, z, h, n_nodes):
-        """h_a of eq. (4) with the strained layer (6): k_f <1/s>_step / (sqrt(pi)
-        Phi_a(s_n)), s_n = sqrt(s2) the layer at the start of the step (0: wetted at
-        tau0 inside it), <1/s> the step mean of :func:`strained_mean_inv_s`."""
+    def strained_conductance(self, s2, inv_s, rows, cols, w, z, h, n_nodes):
+        """h_a of eq. (4) with a strained layer: k_f <1/s>_step / (sqrt(pi) Phi_a(s_n)),
+        s_n = sqrt(s2) the layer at the start of the step (0: wetted inside it), ``inv_s``
+        the step mean <1/s> (:func:`strained_mean_inv_s`,
+        :func:`coupling.stagnation_layer.integrate_layer`)."""
         s_n = np.sqrt(np.maximum(s2, 0.0))
         lo = np.maximum(z[cols] - 0.5 * h[cols], 0.0)
         hi = np.maximum(z[cols] + 0.5 * h[cols], lo + 1e-12 * h[cols])
         phi = np.bincount(rows, weights=w * cell_mean_erf(lo, hi, s_n[rows]),
                           minlength=n_nodes)
-        inv_s = strained_mean_inv_s(s2, a, self.alpha_f, tau0, dt)
         with np.errstate(divide="ignore", invalid="ignore"):
             return np.where(phi > 0, self.k_f * inv_s / (math.sqrt(math.pi) * phi), 0.0)
 
@@ -536,8 +548,8 @@ class ContactHeatInterface:
         advances (one :meth:`TransientHeat.step`).  Returns the heat each particle loses
         [J] (eq. 5): apply it as T_i -= dE_i / (m_i c_i)."""
         T = np.asarray(T, float)
-        if self.layer == "strained" and v is None:
-            raise ValueError('ContactHeatInterface.step: layer = "strained" needs the '
+        if self.layer != "stagnant" and v is None:
+            raise ValueError(f'ContactHeatInterface.step: layer = "{self.layer}" needs the '
                              "particles' velocities v")
         was_wet = ~np.isnan(self.t_wet)
         key = (np.array(x, float, copy=True), np.array(vol, float, ndmin=1, copy=True),
@@ -559,16 +571,26 @@ class ContactHeatInterface:
         self.t_wet[~wet] = np.nan
         t_w = np.where(wet, self.t - np.nan_to_num(self.t_wet), 0.0)
         T_f = np.bincount(rows, weights=w * T[cols], minlength=nX)
-        if self.layer == "strained":
+        if self.layer != "stagnant":
             tau0 = np.clip(-t_w, 0.0, dt)  # wetted inside the step: from t_wet on
             self.s2[newly] = 0.0
             self.s2[~wet] = np.nan
             s2 = np.where(wet, np.nan_to_num(self.s2), 0.0)
             self.strain = self.node_strain(np.asarray(x, float), v, hh, cols, wet)
-            hA = np.where(wet, self.strained_conductance(s2, tau0, self.strain, dt, rows,
-                                                         cols, w, z, hh, nX), 0.0)
-            self.s2 = np.where(wet, strained_layer_s2(s2, self.strain, self.alpha_f,
-                                                      dt - tau0), np.nan)
+            if self.layer == "strained":
+                inv_s = strained_mean_inv_s(s2, self.strain, self.alpha_f, tau0, dt)
+                s2_end = strained_layer_s2(s2, self.strain, self.alpha_f, dt - tau0)
+            else:
+                from coupling.stagnation_layer import integrate_layer, viscous_layer_rate
+
+                h_node = np.bincount(rows, weights=w * hh[cols], minlength=nX)
+                h_node = np.where(h_node > 0, h_node, float(np.mean(hh)) if hh.size else 1.0)
+                c = 1 if (self.dim == 2 and not self.sub.axisymmetric) else 2
+                rate = viscous_layer_rate(self.strain, h_node, self.nu_f, self.alpha_f, c)
+                s2_end, inv_s = integrate_layer(s2, tau0, dt, rate, self.alpha_f)
+            hA = np.where(wet, self.strained_conductance(s2, inv_s, rows, cols, w, z, hh,
+                                                         nX), 0.0)
+            self.s2 = np.where(wet, s2_end, np.nan)
         else:
             hA = np.where(wet, self.conductance(t_w, dt, rows, cols, w, z, hh, nX), 0.0)
         hA = hA * self.sub.surface_area

@@ -42,11 +42,15 @@ def _graded_faces(L: float, h0: float, growth: float) -> np.ndarray:
 
 def strained_contact_fv(strain, t_out, T_f: float, T_s: float, fluid, solid,
                         L_f: float | None = None, L_s: float | None = None,
-                        h0: float | None = None, growth: float = 1.03, rtol: float = 1e-8):
+                        h0: float | None = None, growth: float = 1.03, rtol: float = 1e-8,
+                        velocity=None):
     """The interface temperature [K] and the heat into the solid [J/m^2] at the times
     ``t_out`` (increasing, > 0) of the strained contact (module docstring).
 
-    ``strain``: a [1/s], a number or a function of t; ``fluid``, ``solid``: (k, rho, c).
+    ``strain``: a [1/s], a number or a function of t (w = -a z); or ``velocity``, a
+    function w(z, t) [m/s] of the fluid's normal velocity (e.g. the viscous stagnation
+    layer of :mod:`coupling.stagnation_layer`), which replaces it; ``fluid``, ``solid``:
+    (k, rho, c).
     The grids: fluid over [0, L_f] (default 12 sqrt(alpha_f t_end), with T = T_f at the top:
     inflow), solid over [-L_s, 0] (default 12 sqrt(alpha_s t_end)), first cells ``h0``
     (default 1e-3 sqrt(alpha_f t_end)) growing by ``growth``.  Accuracy: ~1e-5 of the rise
@@ -59,7 +63,7 @@ def strained_contact_fv(strain, t_out, T_f: float, T_s: float, fluid, solid,
     L_f = 12.0 * math.sqrt(af * t_end) if L_f is None else float(L_f)
     L_s = 12.0 * math.sqrt(as_ * t_end) if L_s is None else float(L_s)
     h0 = 1e-3 * math.sqrt(af * t_end) if h0 is None else float(h0)
-    a_of_t = strain if callable(strain) else (lambda t, _a=float(strain): _a)
+    a_of_t = strain if callable(strain) else (lambda t, _a=float(strain or 0.0): _a)
     ff, fs = _graded_faces(L_f, h0, growth), _graded_faces(L_s, h0, growth)
     zf, zs = 0.5 * (ff[1:] + ff[:-1]), -0.5 * (fs[1:] + fs[:-1])
     dzf, dzs = np.diff(ff), np.diff(fs)
@@ -77,7 +81,8 @@ def strained_contact_fv(strain, t_out, T_f: float, T_s: float, fluid, solid,
         dTf = np.diff(np.concatenate([[q0], gf])) / (rf * cf * dzf)
         Tup = np.concatenate([Tf[1:], [T_f]])
         Tdn = np.concatenate([[Tf[0]], Tf[:-1]])  # first cell: one-sided upward difference
-        dTf += a_of_t(t) * zf * (Tup - Tdn) / (zup - zdn)  # -w dT/dz, w = -a z
+        w = velocity(zf, t) if velocity is not None else -a_of_t(t) * zf
+        dTf -= w * (Tup - Tdn) / (zup - zdn)
         gs = np.empty(ns)          # conductive flux downward at the solid cells' lower faces
         gs[:-1] = ks * (Ts[:-1] - Ts[1:]) / (zs[:-1] - zs[1:])
         gs[-1] = 0.0

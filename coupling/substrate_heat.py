@@ -133,12 +133,17 @@ HEAT_SECTION = Section("heat", (
           doc="a surface node becomes wetted when the footprints of the fluid's first cell "
               "layer (coupling.heat_interface) cover this fraction of its area; it stays "
               "wetted while the fluid within two cells of the wall covers any of it"),
-    Param("layer", str, "stagnant", choices=("stagnant", "strained"), when=("model", _FEM),
-          doc="the fluid's thermal layer in the contact closure: \"stagnant\" (grows as "
-              "sqrt(alpha_f t) from wetting: exact for fluid at rest) or \"strained\" "
-              "(stretched by the wall-parallel flow, d(s^2)/dt = alpha_f - 2 a s^2 with a "
-              "the divergence of the wall layer's tangential velocity: a spreading "
-              "droplet; coupling.heat_interface eq. 6)"),
+    Param("layer", str, "strained", choices=("stagnant", "strained", "strained-viscous"),
+          when=("model", _FEM),
+          doc="the fluid's thermal layer in the contact closure: \"strained\" (stretched "
+              "by the wall-parallel flow, d(s^2)/dt = alpha_f - 2 a s^2 with a the "
+              "divergence of the wall layer's tangential velocity, coupling.heat_interface "
+              "eq. 6: a spreading droplet's layer stops growing; identical to \"stagnant\" "
+              "for fluid at rest), \"strained-viscous\" (the same under the viscous "
+              "stagnation-point layer of a no-slip wall: the outer strain read from the "
+              "wall cells' strain through the Hiemenz/Homann profile; needs the fluid's mu; "
+              "coupling.stagnation_layer) or \"stagnant\" (grows as sqrt(alpha_f t) from "
+              "wetting whatever the flow)"),
     Param("strain_radius", float, 3.0, positive=True, when=("model", _FEM),
           doc="radius of the least-squares fit of the wall layer's tangential velocity "
               "that gives the strain of layer = \"strained\", in particle sizes"),
@@ -205,7 +210,8 @@ def build_substrate_heat(scene, cfg, ctx, region):
     itf = ContactHeatInterface(heat, flu.k, flu.rho0, flu.c, axis=dim - 1, level=top,
                                side=1, wet_fraction=hcfg.wet_fraction, period=period,
                                lo=np.asarray(ctx.lo, float), layer=hcfg.layer,
-                               strain_radius=hcfg.strain_radius)
+                               strain_radius=hcfg.strain_radius,
+                               nu_f=(flu.mu / flu.rho0 if getattr(flu, "mu", None) else None))
     ps = ctx.particles
     fl = ps.kind == FLUID
     w = ps.m[fl] * ps.c_heat[fl]
