@@ -27,10 +27,12 @@ runs use DFSPH with Weiler et al.'s implicit viscosity in SPlisHSPlasH):
   never overlaps particles.  The bore below z_r is full of ink at t = 0 (``fill_length``).
 * **Substrate**: the scene's box wall block, kept within ``substrate_margin`` of the path.
 
-After the path's ``duration`` the piston and the nozzle stop and the run goes on for
-``settle_time``.  The deposit is the ink below the outlet plane at the end.  Measured
-(:attr:`DepositResult.info`): the emitted volume against Q t, the ink that left the
-outlet, the least pair distance at emission, the step sizes and the controlling limits.
+With ``start_dwell`` the nozzle first extrudes at the path's start for that long (priming:
+the ink reaches the substrate before the nozzle moves).  After the path the piston and the
+nozzle stop and the run goes on for ``settle_time``.  The deposit is the ink below the
+outlet plane at the end.  Measured (:attr:`DepositResult.info`): the emitted volume
+against Q t, the ink that left the outlet, the least pair distance at emission, the step
+sizes and the controlling limits.
 """
 
 from __future__ import annotations
@@ -141,7 +143,8 @@ class Nozzle:
         self.Q = ex.flow_rate if ex.flow_rate is not None else (
             ex.extrusion_speed * math.pi * self.D**2 / 4)
         self.U_b = self.Q / self.area_bore  # piston speed: Q exactly for the lattice
-        self.duration = float(path.duration)
+        self.dwell = float(ex.start_dwell)  # extruding at the start before moving
+        self.duration = self.dwell + float(path.duration)  # extrusion ends here
         self.ink_material = 0
         self.buffer_material = 0
         self.released = 0  # buffer particles turned into ink
@@ -156,15 +159,17 @@ class Nozzle:
 
     # -- kinematics ----------------------------------------------------------------------
     def P(self, t: float) -> np.ndarray:
-        """Nozzle point (x, y, z0) at ``t`` (held at the path's end after ``duration``)."""
-        xy = np.asarray(self.path.position(min(t, self.duration)), float)
+        """Nozzle point (x, y, z0) at ``t``: at the path's start during the dwell, at
+        path.position(t - dwell) while moving, at the path's end after ``duration``."""
+        tp = min(max(t - self.dwell, 0.0), self.duration - self.dwell)
+        xy = np.asarray(self.path.position(tp), float)
         return np.array([xy[0], xy[1], self.z0])
 
     def V(self, t: float) -> np.ndarray:
-        """Nozzle velocity at ``t`` (zero after ``duration``)."""
-        if t >= self.duration:
+        """Nozzle velocity at ``t`` (zero during the dwell and after ``duration``)."""
+        if t < self.dwell or t >= self.duration:
             return np.zeros(3)
-        v = np.asarray(self.path.velocity(t), float)
+        v = np.asarray(self.path.velocity(t - self.dwell), float)
         return np.array([v[0], v[1], 0.0])
 
     def piston(self, t: float) -> float:
@@ -411,8 +416,9 @@ def simulate_deposit(scene, path, out_dir=None) -> DepositResult:
         dt = lim[name]
         if scene.time.dt is not None:
             dt = min(dt, scene.time.dt) if scene.time.cap_dt else scene.time.dt
-        if t < noz.duration:
-            dt = min(dt, noz.duration - t)
+        for edge in (noz.dwell, noz.duration):  # steps end at the dwell's and path's end
+            if t < edge:
+                dt = min(dt, edge - t)
         dt = min(dt, t_end - t)
         noz.set_velocities(ctx.particles, t, dt)
         try:

@@ -61,6 +61,10 @@ EXTRUSION = Section("extrusion", (
     Param("settle_time", float, 0.0, unit="s", ge=0.0, quantity="time",
           doc="time simulated after the nozzle reaches the end of its path (extrusion "
               "stopped, nozzle at rest) so the last ink lands"),
+    Param("start_dwell", float, 0.0, unit="s", ge=0.0, quantity="time",
+          doc="the nozzle extrudes at the path's start for this long before it moves "
+              "(priming: the first ink reaches the substrate; 0 = start moving at once, the "
+              "first ink then hangs from the nozzle until it touches down)"),
     Param("fill_length", float, None, unit="m", positive=True, quantity="length",
           default_doc="the nozzle diameter",
           doc="length of ink column inside the bore, between the outlet and the inflow "
