@@ -108,3 +108,25 @@ def test_bad_deposits_raise():
         deposit_fitness(np.zeros((0, 3)), H, D, line)
     with pytest.raises(ValueError, match="NaN"):
         deposit_fitness(np.array([[np.nan, 0.0, 0.0]]), H, D, line)
+
+
+def test_lag_model_steady_lag_on_a_line():
+    """The stand-in deposit x'' = (n - x)/tau^2 - 2 zeta x'/tau trails a nozzle moving at
+    speed v on a line by 2 zeta v tau once the start-up transient (~exp(-zeta t/tau)) has
+    died out, centred on the line, rows of round(D/h) particles."""
+    from sphfem.diw.lag_model import lag_deposit
+    from sphfem.diw.toolpath import Toolpath
+
+    v, tau, zeta = 0.01, 0.02, 0.5
+    line = DesiredPath([Line((0.0, 0.0), (0.01, 0.0))])
+    tp = Toolpath.naive(line, v)
+    dep = lag_deposit(tp, D, H, tau, zeta)
+    n_across = round(D / H)
+    rows = dep.positions.reshape(-1, n_across, 3)
+    centre = rows.mean(axis=1)
+    t = np.linspace(0.0, tp.duration, len(rows))
+    late = t > 20 * tau / zeta  # transient below exp(-20)
+    assert late.sum() > 10
+    np.testing.assert_allclose(v * t[late] - centre[late, 0], 2 * zeta * v * tau, rtol=1e-6)
+    np.testing.assert_allclose(centre[:, 1], 0.0, atol=1e-15)
+    assert dep.info["stopped_reason"] is None

@@ -100,6 +100,8 @@ def start_client(scheduler: str | None = None, workers: int = 1, processes: bool
     e.g. ``NUMBA_NUM_THREADS``)."""
     from distributed import Client, LocalCluster
 
+    if not logging.getLogger().isEnabledFor(logging.INFO):
+        logging.getLogger("distributed").setLevel(logging.WARNING)  # no start/stop chatter
     if scheduler:
         return Client(scheduler)
     kw = {"env": env} if (processes and env) else {}
