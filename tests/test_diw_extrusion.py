@@ -161,3 +161,23 @@ def test_naive_bend_overshoots_corner():
     leg = (x[:, 1] > 2e-3) & (x[:, 1] < 4e-3)  # the second leg, away from both ends
     beyond = x[corner, 0].max() - x[leg, 0].max()
     assert beyond > dx
+
+
+def test_start_dwell_primes_the_bead():
+    """With start_dwell longer than the first ink's fall over the stand-off
+    (t = (-U + sqrt(U^2 + 2 g H)) / g = 9.4 ms here), the bead starts at the path's start
+    (within D/2; without priming it starts ~1.5 mm later), and the emitted volume is
+    Q (dwell + duration) to within one layer."""
+    text = REDUCED.read_text().replace("settle_time = 0.01",
+                                       "settle_time = 0.01\nstart_dwell = 0.012")
+    scene = parse_scene_toml(text, source="dwell.toml")
+    path = Line([0.0, 0.0], [1.0, 0.0], scene.extrusion.nozzle_speed, 3e-3)
+    res = simulate_deposit(scene, path)
+    info, D = res.info, res.nozzle_diameter
+    assert info["stopped_reason"] is None
+    s = res.positions[:, 0]
+    on_path = s[s > 0]
+    assert on_path.min() < 0.5 * D
+    Q = info["flow_rate_m3_per_s"]
+    layer = info["bore_points"] * info["dx"] ** 3
+    assert abs(info["emitted_volume_m3"] - Q * (0.012 + path.duration)) <= layer
