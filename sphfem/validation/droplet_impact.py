@@ -154,8 +154,31 @@ def strained_reference(summary: dict, t_contact: float, window: list[dict]):
     a = np.array([h["strain_impact"] for h in hist])
     tw = np.array([h["t"] for h in window]) - t_contact
     T_s0 = sh["substrate_initial_temperature_K"]
-    Ti, _ = strained_contact_fv(lambda x: float(np.interp(x + t_contact, t, a)), tw,
-                                sh["fluid_initial_temperature_K"], T_s0, *props)
+
+    def strain(x):
+        return float(np.interp(x + t_contact, t, a))
+
+    velocity = None
+    if summary["scene"]["coupling"]["heat"].get("layer") == "strained-viscous":
+        # the run's closure reads the outer strain through the Homann layer (eq. 3 of
+        # coupling.stagnation_layer): the reference takes the same flow, resolved
+        from coupling.stagnation_layer import outer_strain, stagnation_profile
+
+        nu = float(mats[fluid]["mu"]) / float(mats[fluid]["rho0"])
+        dx = float(summary["scene"]["sph"]["dx"])
+        eta, f, _ = stagnation_profile(2)
+        beta = float(eta[-1] - f[-1])
+
+        def velocity(z, x):
+            a1 = strain(x)
+            if a1 <= 0.0:
+                return -a1 * z
+            a_o, d = (float(v[0]) for v in outer_strain(np.array([a1]), dx, nu, 2))
+            zeta = z / d
+            return -a_o * d * np.where(zeta < eta[-1], np.interp(zeta, eta, f), zeta - beta)
+
+    Ti, _ = strained_contact_fv(strain, tw, sh["fluid_initial_temperature_K"], T_s0, *props,
+                                velocity=velocity)
     return list(Ti - T_s0)
 
 
