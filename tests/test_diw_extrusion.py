@@ -81,6 +81,15 @@ def test_extrusion_scene_needs_one_flux():
         parse_scene_toml(text, source="x.toml")
 
 
+def test_generic_driver_refuses_extrusion_scene():
+    """The nozzle adds particles, which the driver's module protocol forbids: building the
+    scene's modules says where extrusion scenes run instead."""
+    from sphfem.physics import build_modules
+
+    with pytest.raises(SceneError, match="simulate_deposit"):
+        build_modules(load_scene(REDUCED))
+
+
 @pytest.fixture(scope="module")
 def straight_bead():
     """An 8 mm straight line at 30 degrees to the lattice axes (so the bead's centreline is
