@@ -153,8 +153,8 @@ def test_straight_bead_mass_and_centreline(straight_bead):
 def test_naive_bend_overshoots_corner():
     """The naive 90-degree toolpath (examples/diw/bend90.toml, thesis ink, at D/dx = 4):
     the deposit reaches past the corner (x > 0, where the path never goes) farther than the
-    bead's own edge on the second leg, by more than one particle spacing (measured 0.48 D
-    = 1.9 dx; 0.54 D at D/dx = 8, docs/diw_extrusion.md).  About 10 CPU s."""
+    bead's own edge on the second leg, by more than one particle spacing (measured 0.50 D
+    = 2.0 dx; 0.53 D at D/dx = 8, docs/diw_extrusion.md).  About 10 CPU s."""
     data = tomllib.loads((ROOT / "examples" / "diw" / "bend90.toml").read_text())
     D = data["extrusion"]["nozzle_diameter"]
     dx = D / 4
