@@ -104,16 +104,28 @@ def _tables(c: int):
 
 
 def layer_J(sigma, c: int):
-    """J(sigma) of eq. (2), elementwise (log-log table between 1e-4 and 1e4, the
-    asymptotes sqrt(pi) f''(0) sigma^3 and 2 sigma^2 - sqrt(pi) beta sigma beyond)."""
+    """J(sigma) of eq. (2), elementwise (log-log table, uniform in log sigma, between 1e-4
+    and 1e4; the asymptotes sqrt(pi) f''(0) sigma^3 and 2 sigma^2 - sqrt(pi) beta sigma
+    beyond)."""
     sig, J, _, _, beta = _tables(c)
+    logJ = _log_table(c)
     s = np.asarray(sigma, float)
-    _, _, fpp = stagnation_profile(c)
-    lo = math.sqrt(math.pi) * fpp[0] * s ** 3
-    hi = 2.0 * s * s - math.sqrt(math.pi) * beta * s
-    with np.errstate(divide="ignore"):
-        mid = np.exp(np.interp(np.log(np.maximum(s, 1e-300)), np.log(sig), np.log(J)))
-    return np.where(s < sig[0], lo, np.where(s > sig[-1], hi, mid))
+    u = (np.log(np.maximum(s, 1e-300)) - math.log(sig[0])) * ((sig.size - 1)
+                                                               / math.log(sig[-1] / sig[0]))
+    i = np.clip(u.astype(np.int64), 0, sig.size - 2)
+    w = u - i
+    out = np.exp(logJ[i] * (1.0 - w) + logJ[i + 1] * w)
+    below, above = u < 0.0, u > sig.size - 1
+    if below.any() or above.any():
+        fpp0 = stagnation_profile(c)[2][0]
+        out = np.where(below, math.sqrt(math.pi) * fpp0 * s ** 3, out)
+        out = np.where(above, 2.0 * s * s - math.sqrt(math.pi) * beta * s, out)
+    return out
+
+
+@functools.lru_cache(maxsize=4)
+def _log_table(c: int):
+    return np.log(_tables(c)[1])
 
 
 def outer_strain(a1, h, nu: float, c: int):
@@ -170,7 +182,7 @@ def viscous_layer_rate(a1, h, nu: float, alpha: float, c: int):
     return rate
 
 
-def integrate_layer(s2, tau0, dt: float, rate, alpha: float, n: int = 8, sub: int = 2):
+def integrate_layer(s2, tau0, dt: float, rate, alpha: float, n: int = 8, sub: int = 1):
     """Advance d(s^2)/dt = rate(s^2) over the step [tau0, dt] (tau0 > 0: wetted inside it)
     and return (s^2 at the end, the step mean (1/dt) int 1/s dt).  Per node, in
     u = sqrt(t - tau0 + s2 / alpha) (s ~ sqrt(alpha) u near wetting, so 2 u / s is smooth):
