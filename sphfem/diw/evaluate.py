@@ -84,10 +84,12 @@ class ResultCache:
 
 def _timed(fn: Callable, x) -> dict:
     """Worker side: run ``fn(x)`` (a dict with at least ``objective``) and time it."""
+    t_start = time.time()
     t0 = time.perf_counter()
     out = dict(fn(np.asarray(x, dtype=float)))
     out.setdefault("wall_s", time.perf_counter() - t0)
     out["task_s"] = time.perf_counter() - t0
+    out["t_start"], out["t_end"] = t_start, time.time()  # epoch s: the cluster's timeline
     if not np.isfinite(out["objective"]):
         raise FloatingPointError(f"objective is {out['objective']}")
     return out
