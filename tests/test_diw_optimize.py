@@ -106,6 +106,15 @@ def test_other_methods_find_known_optimum(method, budget):
     assert np.max(np.abs(res.x - TARGET)) < 0.05
 
 
+def test_cma_stopping_by_itself_ends_the_loop():
+    """CMA-ES converges on the quadratic long before a budget of 1e5 and stops (pymoo's
+    has_next): the loop ends there instead of asking a finished algorithm."""
+    res = minimize(lambda X, it: np.array([quadratic(x)["objective"] for x in X]),
+                   LO, HI, 100_000, method="cma", pop_size=10, seed=1)
+    assert res.n_eval < 5000
+    assert res.objective < 1e-10
+
+
 def test_cache_hit_recomputes_nothing(client, tmp_path):
     """A second call with the same points takes all of them from the cache: no new call of
     the function, identical objectives; a different job key misses."""

@@ -18,7 +18,8 @@ Methods (``method``):
 * ``de``: differential evolution DE/rand/1/bin (Storn & Price 1997), pymoo's ``DE``.
 
 :func:`minimize` runs the ask/tell loop until the evaluation budget is spent (whole
-batches: the last one may pass the budget by less than one population).  Seeded runs are
+batches: the last one may pass the budget by less than one population) or the method
+stops by itself (CMA-ES on convergence).  Seeded runs are
 deterministic, which the on-disk cache of :mod:`sphfem.diw.evaluate` relies on to resume.
 """
 
@@ -108,6 +109,8 @@ def minimize(evaluate: Callable, lower, upper, budget: int, method: str = "pso",
     best_x, best_f = None, np.inf
     history = []
     while n_eval < budget:
+        if not algo.has_next():  # CMA-ES stops by itself once converged (tolx, tolfun)
+            break
         pop = algo.ask()
         X = pop.get("X")
         F = np.asarray(evaluate(X, it), dtype=float).reshape(-1)
