@@ -143,8 +143,17 @@ def main(argv=None) -> int:
     ap.add_argument("--max-error-v", type=float, default=0.1)
     ap.add_argument("--workdir", type=Path, default=Path("/tmp/splash_dambreak"))
     ap.add_argument("--out", type=Path, default=HERE)
+    ap.add_argument("--report-only", action="store_true",
+                    help="write RESULTS.md from --out/results.json (e.g. of a stopped run)")
     a = ap.parse_args(argv)
     a.out.mkdir(parents=True, exist_ok=True)
+    if a.report_only:
+        saved = json.loads((a.out / "results.json").read_text())
+        runs = saved["runs"]
+        a.rounds = len({r["round"] for r in runs})
+        (a.out / "RESULTS.md").write_text(report(runs, a, saved["loads"]))
+        print((a.out / "RESULTS.md").read_text())
+        return 0
     for m in a.methods:  # untimed: SPlisHSPlasH's volume map into its cache, numba caches
         run_splash(a.splash_python, m, a, 0.01)
     runs, loads = [], []
