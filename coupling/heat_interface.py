@@ -126,7 +126,7 @@ On a no-slip wall the stretching flow is itself slowed inside the viscous layer,
 thermal layer of Pr ~ 1 shares: ``layer = "strained-viscous"`` reads the outer strain and
 the viscous length from the fitted strain of the wall cells through the Hiemenz / Homann
 stagnation-point profile and advances s by the energy integral of the erf profile in that
-flow (:mod:`coupling.stagnation_layer`, eq. 2'; exact at a = 0 and at the steady layer).
+flow (:mod:`sphfem.heat.stagnation_layer`, eq. 2'; exact at a = 0 and at the steady layer).
 It needs the fluid's kinematic viscosity ``nu_f``.
 
 What the model assumes (and where it is not exact): the fluid layer is the similarity
@@ -153,7 +153,7 @@ __all__ = ["ContactHeatInterface", "cell_mean_erf", "contact_solution",
 #: wetting criteria: "contact-layer" (eq. 2) or "chi" (the earlier height taper, eq. 2')
 WETTING = ("contact-layer", "chi")
 #: fluid-side layer models: "stagnant" (s^2 = alpha_f t_w), "strained" (eq. 6) or
-#: "strained-viscous" (eq. 6 under the viscous stagnation-point layer, coupling.stagnation_layer)
+#: "strained-viscous" (eq. 6 under the viscous stagnation-point layer, sphfem.heat.stagnation_layer)
 LAYERS = ("stagnant", "strained", "strained-viscous")
 
 
@@ -507,7 +507,7 @@ class ContactHeatInterface:
         """h_a of eq. (4) with a strained layer: k_f <1/s>_step / (sqrt(pi) Phi_a(s_n)),
         s_n = sqrt(s2) the layer at the start of the step (0: wetted inside it), ``inv_s``
         the step mean <1/s> (:func:`strained_mean_inv_s`,
-        :func:`coupling.stagnation_layer.integrate_layer`)."""
+        :func:`sphfem.heat.stagnation_layer.integrate_layer`)."""
         s_n = np.sqrt(np.maximum(s2, 0.0))
         lo = np.maximum(z[cols] - 0.5 * h[cols], 0.0)
         hi = np.maximum(z[cols] + 0.5 * h[cols], lo + 1e-12 * h[cols])
@@ -581,7 +581,7 @@ class ContactHeatInterface:
                 inv_s = strained_mean_inv_s(s2, self.strain, self.alpha_f, tau0, dt)
                 s2_end = strained_layer_s2(s2, self.strain, self.alpha_f, dt - tau0)
             else:
-                from coupling.stagnation_layer import integrate_layer, viscous_layer_rate
+                from sphfem.heat.stagnation_layer import integrate_layer, viscous_layer_rate
 
                 h_node = np.bincount(rows, weights=w * hh[cols], minlength=nX)
                 h_node = np.where(h_node > 0, h_node, float(np.mean(hh)) if hh.size else 1.0)

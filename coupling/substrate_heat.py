@@ -142,7 +142,7 @@ HEAT_SECTION = Section("heat", (
               "for fluid at rest), \"strained-viscous\" (the same under the viscous "
               "stagnation-point layer of a no-slip wall: the outer strain read from the "
               "wall cells' strain through the Hiemenz/Homann profile; needs the fluid's mu; "
-              "coupling.stagnation_layer) or \"stagnant\" (grows as sqrt(alpha_f t) from "
+              "sphfem.heat.stagnation_layer) or \"stagnant\" (grows as sqrt(alpha_f t) from "
               "wetting whatever the flow)"),
     Param("strain_radius", float, 3.0, positive=True, when=("model", _FEM),
           doc="radius of the least-squares fit of the wall layer's tangential velocity "

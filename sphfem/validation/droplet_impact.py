@@ -20,7 +20,7 @@ Each figure gets an observed order, a Richardson limit and a GCI error bar
   included (|f_h - f_0| + GCI |f_h| <= 0.1 |f_0|); an oscillatory or diverging sequence
   gets a 3x-spread error bar and fails unless the spread is small;
 * contact temperature: at the finest level the impact-point rise stays within 10 % of the
-  rise of the strained contact (:mod:`coupling.strained_contact`: the 1D stagnation-line
+  rise of the strained contact (:mod:`sphfem.heat.strained_contact`: the 1D stagnation-line
   layer w = -a z on the conducting substrate, solved by finite volumes, independent of the
   SPH/FEM path) driven by the run's own strain history a(t) at the impact point, over the
   window above.  The static contact of two semi-infinite bodies, (e_f T_f + e_s T_s) /
@@ -134,13 +134,13 @@ def figures(summary: dict, speed: float, diameter: float) -> dict:
 
 
 def strained_reference(summary: dict, t_contact: float, window: list[dict]):
-    """The strained-contact rise [K] (:func:`coupling.strained_contact.strained_contact_fv`)
+    """The strained-contact rise [K] (:func:`sphfem.heat.strained_contact.strained_contact_fv`)
     at the ``window`` samples of the run's impact-point history, driven by the run's own
     strain history (linear in time between samples; None when the run has none: a
     stagnant-layer run)."""
     import numpy as np
 
-    from coupling.strained_contact import strained_contact_fv
+    from sphfem.heat.strained_contact import strained_contact_fv
 
     sh = summary["diagnostics"]["coupling"]["substrate_heat"]
     hist = sh["history"]
@@ -161,8 +161,8 @@ def strained_reference(summary: dict, t_contact: float, window: list[dict]):
     velocity = None
     if summary["scene"]["coupling"]["heat"].get("layer") == "strained-viscous":
         # the run's closure reads the outer strain through the Homann layer (eq. 3 of
-        # coupling.stagnation_layer): the reference takes the same flow, resolved
-        from coupling.stagnation_layer import outer_strain, stagnation_profile
+        # sphfem.heat.stagnation_layer): the reference takes the same flow, resolved
+        from sphfem.heat.stagnation_layer import outer_strain, stagnation_profile
 
         nu = float(mats[fluid]["mu"]) / float(mats[fluid]["rho0"])
         dx = float(summary["scene"]["sph"]["dx"])

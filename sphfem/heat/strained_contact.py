@@ -49,7 +49,7 @@ def strained_contact_fv(strain, t_out, T_f: float, T_s: float, fluid, solid,
 
     ``strain``: a [1/s], a number or a function of t (w = -a z); or ``velocity``, a
     function w(z, t) [m/s] of the fluid's normal velocity (e.g. the viscous stagnation
-    layer of :mod:`coupling.stagnation_layer`), which replaces it; ``fluid``, ``solid``:
+    layer of :mod:`sphfem.heat.stagnation_layer`), which replaces it; ``fluid``, ``solid``:
     (k, rho, c).
     The grids: fluid over [0, L_f] (default 12 sqrt(alpha_f t_end), with T = T_f at the top:
     inflow), solid over [-L_s, 0] (default 12 sqrt(alpha_s t_end)), first cells ``h0``
