@@ -39,9 +39,12 @@ import numpy as np
 def _measure(job, out, client, n_workers, budget, population, method):
     from sphfem.diw.driver import optimize_job
 
-    # warm-up, timed apart: each worker imports sphfem.diw (unpickling the job needs it)
+    # warm-up, timed apart: each worker and the scheduler (it unpickles the submitted
+    # tasks) import sphfem.diw; without it a separate `dask scheduler` spends its first
+    # ~8 s (loaded machine) importing while the first batch waits
     t0 = time.perf_counter()
     client.run(importlib.import_module, "sphfem.diw.job")
+    client.run_on_scheduler(importlib.import_module, "sphfem.diw.job")
     warm = time.perf_counter() - t0
     s = optimize_job(job, out, method=method, budget=budget, population=population,
                      progress=False, report=False, client=client, stream=None)
@@ -60,6 +63,15 @@ def _measure(job, out, client, n_workers, budget, population, method):
                          for p in ind.glob("*.json")])
     over_ind = (wall_ind * n_workers - task_ind.sum()) / len(task_ind)
     recs = [json.loads(p.read_text()) for p in (Path(out) / "cache").glob("*.json")]
+    # the driver's timeline: start -> first task started; last task ended -> batch returned
+    tl = json.loads((Path(out) / "batches.json").read_text())
+    first = min(r["result"]["t_start"] for r in recs)
+    lead_in = first - tl["t0"]
+    tails = []
+    for b in tl["batches"]:
+        ends = [r["result"]["t_end"] for r in recs if r["iteration"] == b["iteration"]]
+        tails.append(b["returned"] - max(ends))
+    submit = [b["submitted"] - b["called"] for b in tl["batches"]]
     task = np.array([r["result"]["task_s"] for r in recs if r["status"] == "ok"])
     # per iteration (epoch stamps of the tasks): its span, the workers' idle time in it
     # (span x workers - task seconds: the wait for the batch's last member) and the gap
@@ -84,6 +96,9 @@ def _measure(job, out, client, n_workers, budget, population, method):
             "overhead_fraction": round(float(over / task.mean()), 4),
             "warmup_s": round(warm, 2),
             "batch_idle_per_eval_s": round(float(np.sum(idle) / n), 4),
+            "lead_in_s": round(lead_in, 3),
+            "submit_per_iteration_s": round(float(np.mean(submit)), 3),
+            "result_to_return_per_iteration_s": round(float(np.mean(tails)), 3),
             "driver_gap_per_iteration_s": round(float(np.mean(gaps)), 4) if gaps else None,
             "independent_wall_s": round(wall_ind, 2),
             "independent_overhead_per_eval_s": round(float(over_ind), 4),

@@ -6,6 +6,7 @@ Output folder::
     cache/<key>.json      one record per evaluation (sphfem.diw.evaluate), written at once
     history.json          per iteration: evaluations, best of the iteration, best so far
     evaluations.csv       every evaluation: iteration, key, objective, status
+    batches.json          per iteration: when the batch was called, submitted, returned
     best_parameters.json  best parameters, waypoints, naive and optimised metrics
     naive/, best/         the two runs again with their VTU (extrusion evaluator)
     fitness_history.png, toolpath_naive.png, toolpath_best.png   (sphfem.diw.report)
@@ -106,7 +107,7 @@ def optimize_job(job: ToolpathJob, out, *, method: str = "pso", budget: int = 20
             history.append(row)
             _write_json(out / "history.json", {"method": method, "rows": history})
 
-        t0 = time.perf_counter()
+        t0, t0_epoch = time.perf_counter(), time.time()
         res = minimize(ev, job.space.lower, job.space.upper, budget, method=method,
                        pop_size=population, seed=seed, callback=on_iteration,
                        **(options or {}))
@@ -117,6 +118,7 @@ def optimize_job(job: ToolpathJob, out, *, method: str = "pso", budget: int = 20
         lines = ["iteration,key,objective,status"] + [
             f"{it},{k},{f!r},{st}" for it, k, f, st in ev.log]
         (out / "evaluations.csv").write_text("\n".join(lines) + "\n")
+        _write_json(out / "batches.json", {"t0": t0_epoch, "batches": ev.batches})
 
         summary = {
             "method": method, "budget": budget, "population": population, "seed": seed,

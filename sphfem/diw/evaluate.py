@@ -132,6 +132,8 @@ class DaskEvaluator:
         self.iteration = 0
         #: every evaluation of the run in order: (iteration, key, objective, status)
         self.log: list[tuple[int, str, float, str]] = []
+        #: per call (epoch s): called, all submitted, returned
+        self.batches: list[dict] = []
 
     def _postfix(self, queued: int) -> None:
         if self.progress is not None:
@@ -147,6 +149,7 @@ class DaskEvaluator:
         from distributed import as_completed
 
         self.iteration = iteration
+        stamps = {"iteration": iteration, "called": time.time()}
         X = np.atleast_2d(np.asarray(X, dtype=float))
         keys = [point_key(self.job_key, x) for x in X]
         records: dict[str, dict] = {}
@@ -162,6 +165,7 @@ class DaskEvaluator:
             else:
                 pending[self._submit(key, X[i], 1)] = (key, i, 1, [])
         self._postfix(len(pending))
+        stamps["submitted"] = time.time()
         ac = as_completed(list(pending), with_results=False)
         for fut in ac:
             key, i, attempt, errors = pending.pop(fut)
@@ -197,6 +201,8 @@ class DaskEvaluator:
             records[key] = rec
             self._done(rec)
             self._postfix(len(pending))
+        stamps["returned"] = time.time()
+        self.batches.append(stamps)
         F = np.array([records[k]["objective"] for k in keys], dtype=float)
         for k in keys:
             r = records[k]
