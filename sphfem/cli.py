@@ -79,6 +79,8 @@ def _parser() -> argparse.ArgumentParser:
     o.add_argument("--workers", type=int, default=1, help="LocalCluster workers (default 1)")
     o.add_argument("--budget", type=int, help="evaluations (overrides [optimize] budget)")
     o.add_argument("--method", choices=("pso", "cma", "de"), help="overrides [optimize]")
+    o.add_argument("--evaluator", choices=("extrusion", "lag-model"),
+                   help="overrides [optimize]: lag-model is the cheap analytic stand-in")
     o.add_argument("--resume", action="store_true", help="continue in an existing --out")
     o.add_argument("--no-progress", action="store_true", help="hide the progress bar")
 
