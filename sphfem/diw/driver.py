@@ -163,7 +163,8 @@ def command(args) -> int:
     errors propagate as SceneError / OutputExistsError."""
     from sphfem.diw.job import load_job
 
-    job, opt, _ = load_job(args.scene, method=args.method, budget=args.budget)
+    job, opt, _ = load_job(args.scene, method=args.method, budget=args.budget,
+                           evaluator=getattr(args, "evaluator", None))
     options = {}
     if opt.method == "pso":
         options = {"w": opt.inertia, "c1": opt.c1, "c2": opt.c2, "reseed": opt.reseed}
