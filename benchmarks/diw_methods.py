@@ -5,8 +5,8 @@
 
 Prints, per method and seed, the best objective, its maximum deviation (in nozzle
 diameters) against the naive toolpath's, and the evaluations computed; writes
-``methods.json`` and ``methods.png`` (best objective so far against evaluations).  All
-methods share one cache per scene (the job hash leaves the optimiser out).
+``methods.json`` and ``methods.png`` (best objective so far against evaluations).  Each
+run has its own cache folder, so every method pays for all of its evaluations.
 """
 
 from __future__ import annotations
@@ -48,15 +48,11 @@ def main(argv=None):
         res0, _ = job.evaluate(None)
         naive = {k: res0[k] for k in ("objective", "max_dev_D", "mean_dev_D", "gap_D")}
         print(json.dumps({"naive": naive}), flush=True)
-        shared = out / "cache"
         for method in args.methods:
             for seed in args.seeds:
                 run = out / f"{method}-{seed}"
                 if run.exists():
                     shutil.rmtree(run)
-                run.mkdir()
-                if shared.exists():
-                    shutil.copytree(shared, run / "cache")
                 s = optimize_job(job, run, method=method, budget=args.budget,
                                  population=args.population, seed=seed, progress=False,
                                  report=False, client=client, stream=None)
@@ -71,7 +67,6 @@ def main(argv=None):
                        "max_dev_ratio": naive["max_dev_D"] / best["max_dev_D"],
                        "history": [(r["n_eval"], r["best"]) for r in hist]}
                 rows.append(row)
-                shutil.copytree(run / "cache", shared, dirs_exist_ok=True)
                 print(json.dumps({k: v for k, v in row.items() if k != "history"}),
                       flush=True)
     finally:
