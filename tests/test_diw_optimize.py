@@ -260,6 +260,16 @@ def test_resume_after_killed_driver_recomputes_nothing(client, tmp_path):
     assert ref["parameters"] == summary["parameters"]
 
 
+def test_small_budget_runs_one_smaller_population(client, tmp_path):
+    """`--budget 3` with 20 members per iteration: 3 evaluations (one batch of 3), not 20."""
+    from sphfem.diw.driver import optimize_job
+
+    job = ToolpathJob("bend90", 0.1, 7e-4, 1.75e-4, evaluator="lag-model")
+    s = optimize_job(job, tmp_path / "o", budget=3, population=20, progress=False,
+                     report=False, client=client, stream=None)
+    assert s["evaluations"] == s["computed"] == 3
+
+
 def test_cli_refuses_a_scene_without_extrusion(tmp_path, capsys):
     """`sphfem optimize` on a scene that is not an extrusion job: exit code 2, one line."""
     from sphfem.cli import main

@@ -66,6 +66,8 @@ def optimize_job(job: ToolpathJob, out, *, method: str = "pso", budget: int = 20
     ``options``: PSO settings for :func:`sphfem.diw.optimize.make_algorithm`.
     """
     out = Path(out)
+    # a budget below one population runs one smaller population (DE/rand/1 needs 4)
+    population = max(min(population, budget), 4 if method == "de" else 2)
     key = job_hash(job.describe())
     job_file = out / "job.json"
     if out.exists() and any(out.iterdir()):

@@ -12,7 +12,8 @@ OPTIMIZE = register_section(Section("optimize", (
               "CMA-ES or differential evolution (pymoo; `--method` overrides)"),
     Param("budget", int, 200, ge=1,
           doc="evaluations (simulations) of the optimisation, rounded up to whole "
-              "iterations of `population` (`--budget` overrides)"),
+              "iterations of `population`; a budget below `population` is one iteration "
+              "of `budget` members (`--budget` overrides)"),
     Param("population", int, 20, ge=2, doc="members per iteration (swarm size)"),
     Param("seed", int, 0, ge=0, doc="random seed of the optimiser (a resumed run retraces "
                                     "the interrupted one with it)"),
