@@ -251,6 +251,13 @@ def test_resume_after_killed_driver_recomputes_nothing(client, tmp_path):
     assert summary["computed"] == 12 - len(before)
     for png in ("fitness_history.png", "toolpath_naive.png", "toolpath_best.png"):
         assert (out / png).stat().st_size > 0
+    # resuming the finished run: nothing computed, the report's two runs kept
+    finals = {n: (out / n / "final.json").stat().st_mtime_ns for n in ("naive", "best")}
+    again = optimize_job(job, out, budget=12, population=4, resume=True, progress=False,
+                         client=client, stream=None)
+    assert again["computed"] == 0 and again["objective"] == summary["objective"]
+    assert again["best"] == summary["best"]
+    assert {n: (out / n / "final.json").stat().st_mtime_ns for n in finals} == finals
     # uninterrupted, from scratch (lag_cost, a sleep, is not part of the job's hash)
     fresh = dataclasses.replace(job, lag_cost=0.0)
     ref = optimize_job(fresh, tmp_path / "ref", budget=12, population=4, progress=False,

@@ -8,7 +8,8 @@ Output folder::
     evaluations.csv       every evaluation: iteration, key, objective, status
     batches.json          per iteration: when the batch was called, submitted, returned
     best_parameters.json  best parameters, waypoints, naive and optimised metrics
-    naive/, best/         the two runs again with their VTU (extrusion evaluator)
+    naive/, best/         the two runs again with their VTU (extrusion evaluator) and
+                          final.json (result and deposit; kept by a later --resume)
     fitness_history.png, toolpath_naive.png, toolpath_best.png   (sphfem.diw.report)
 
 An existing folder is refused unless ``resume``; resuming checks that the job is the same
@@ -27,7 +28,7 @@ from pathlib import Path
 
 import numpy as np
 
-from sphfem.diw.evaluate import DaskEvaluator, ResultCache, job_hash
+from sphfem.diw.evaluate import DaskEvaluator, ResultCache, job_hash, point_key
 from sphfem.diw.job import ToolpathJob
 from sphfem.diw.optimize import minimize
 from sphfem.errors import OutputExistsError
@@ -134,10 +135,22 @@ def optimize_job(job: ToolpathJob, out, *, method: str = "pso", budget: int = 20
         summary["waypoints"] = {"s": s.tolist(), "delta_m": d.tolist()}
         finals = {}
         if report:
-            futs = {name: client.submit(_final_run, job, x, str(out / name), pure=False,
-                                        key=f"diw-final-{name}-{key[:12]}-{time.time_ns()}")
-                    for name, x in (("naive", None), ("best", res.x))}
-            finals = {name: f.result() for name, f in futs.items()}
+            finals, futs = {}, {}
+            for name, x in (("naive", None), ("best", res.x)):
+                # a finished run of the same point (an earlier, complete --resume) is kept
+                tag = point_key(key, [] if x is None else x)
+                rec = out / name / "final.json"
+                old = json.loads(rec.read_text()) if rec.exists() else {}
+                if old.get("point") == tag and old.get("status") == "ok":
+                    finals[name] = old
+                else:
+                    futs[name] = (tag, client.submit(
+                        _final_run, job, x, str(out / name), pure=False,
+                        key=f"diw-final-{name}-{tag[:12]}-{time.time_ns()}"))
+            for name, (tag, f) in futs.items():
+                finals[name] = {**f.result(), "point": tag}
+                if finals[name]["status"] == "ok":
+                    _write_json(out / name / "final.json", finals[name])
             for name, fr in finals.items():
                 summary[name] = (fr["result"] if fr["status"] == "ok"
                                  else {"status": "failed", "error": fr["error"]})
