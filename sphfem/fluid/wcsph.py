@@ -407,7 +407,9 @@ class FluidSolver:
         if not eos:  # forces without pressure: p / rho^2 = 0 in the pass, p stays the method's
             s.pr[:] = 0.0
             p.p[:] = p_own
-        delta_coef = pa.delta * self.h * pa.c0
+        # the delta-SPH term only feeds drho, which a projection method does not use (it sums
+        # the density itself): no diffusive term, so no density gradient unless shifting needs it
+        delta_coef = pa.delta * self.h * pa.c0 if eos else 0.0
         nb, cnt = self._nb, s.cnt  # in-range rows (fluid-owned buffer, shared list untouched)
         if delta_coef > 0 or pa.shifting != "none":
             passes.density_gradient(p.x, p.rho, s.V, p.kind, nl.offsets, nl.indices, self.R,
