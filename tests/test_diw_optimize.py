@@ -277,6 +277,24 @@ def test_small_budget_runs_one_smaller_population(client, tmp_path):
     assert s["evaluations"] == s["computed"] == 3
 
 
+def test_start_naive_is_evaluated_and_never_beaten_by_worse(client, tmp_path):
+    """With start_naive (default) the naive toolpath is evaluated in the first iteration
+    and the result is at most its objective; without it, it is not evaluated."""
+    from sphfem.diw.driver import optimize_job
+
+    job = ToolpathJob("bend90", 0.1, 7e-4, 1.75e-4, evaluator="lag-model")
+    naive = job(job.space.naive())["objective"]
+    assert naive == job.evaluate(None)[0]["objective"]  # the naive point is the naive path
+    key = point_key(job_hash(job.describe()), job.space.naive())
+    s = optimize_job(job, tmp_path / "a", budget=8, population=4, progress=False,
+                     report=False, client=client, stream=None)
+    assert ResultCache(tmp_path / "a" / "cache").get(key)["iteration"] == 0
+    assert s["objective"] <= naive
+    optimize_job(job, tmp_path / "b", budget=8, population=4, progress=False, report=False,
+                 client=client, stream=None, start_naive=False)
+    assert ResultCache(tmp_path / "b" / "cache").get(key) is None
+
+
 def test_cli_refuses_a_scene_without_extrusion(tmp_path, capsys):
     """`sphfem optimize` on a scene that is not an extrusion job: exit code 2, one line."""
     from sphfem.cli import main

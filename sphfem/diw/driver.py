@@ -59,12 +59,13 @@ def optimize_job(job: ToolpathJob, out, *, method: str = "pso", budget: int = 20
                  population: int = 20, seed: int = 0, options: dict | None = None,
                  scheduler: str | None = None, workers: int = 1, resume: bool = False,
                  progress: bool = True, report: bool = True, client=None,
-                 stream=sys.stderr) -> dict:
+                 stream=sys.stderr, start_naive: bool = True) -> dict:
     """Optimise ``job``'s toolpath; returns the summary written to best_parameters.json.
 
     ``client``: a ``distributed.Client`` to use (else one is started: ``scheduler``
     address, or a LocalCluster of ``workers`` processes, closed at the end).
-    ``options``: PSO settings for :func:`sphfem.diw.optimize.make_algorithm`.
+    ``options``: PSO settings for :func:`sphfem.diw.optimize.make_algorithm`;
+    ``start_naive``: the naive toolpath is a member of the first population.
     """
     out = Path(out)
     # a budget below one population runs one smaller population (DE/rand/1 needs 4)
@@ -81,7 +82,7 @@ def optimize_job(job: ToolpathJob, out, *, method: str = "pso", budget: int = 20
                                     f"changed); use a new --out folder")
     out.mkdir(parents=True, exist_ok=True)
     settings = {"method": method, "budget": budget, "population": population, "seed": seed,
-                **(options or {})}
+                "start_naive": start_naive, **(options or {})}
     _write_json(job_file, {"hash": key, "job": job.describe(), "settings": settings})
 
     own_client = client is None
@@ -113,6 +114,7 @@ def optimize_job(job: ToolpathJob, out, *, method: str = "pso", budget: int = 20
         t0, t0_epoch = time.perf_counter(), time.time()
         res = minimize(ev, job.space.lower, job.space.upper, budget, method=method,
                        pop_size=population, seed=seed, callback=on_iteration,
+                       start=job.space.naive() if start_naive else None,
                        **(options or {}))
         wall = time.perf_counter() - t0
         if bar is not None:
@@ -186,7 +188,8 @@ def command(args) -> int:
     summary = optimize_job(job, args.out, method=opt.method, budget=opt.budget,
                            population=opt.population, seed=opt.seed, options=options,
                            scheduler=args.scheduler, workers=args.workers,
-                           resume=args.resume, progress=not args.no_progress)
+                           resume=args.resume, progress=not args.no_progress,
+                           start_naive=opt.start_naive)
     ratio = summary.get("max_dev_improvement")
     print(f"sphfem optimize: {summary['evaluations']} evaluations ({summary['computed']} "
           f"computed, {summary['cached']} from the cache, {summary['failed']} failed) in "

@@ -68,17 +68,21 @@ class ThesisPSO(PSO):
 
 
 def make_algorithm(method: str, pop_size: int, *, w=0.7298, c1=1.49618, c2=1.49618,
-                   reseed: int | None = None, sigma: float = 0.25):
+                   reseed: int | None = None, sigma: float = 0.25, initial=None):
     """A pymoo algorithm for ``method`` (one of :data:`METHODS`) with ``pop_size``
     members per iteration.  ``reseed`` (PSO): M, default 10 % of the swarm; ``sigma``
-    (CMA-ES): initial step as a fraction of the (normalised) parameter range."""
+    (CMA-ES): initial step as a fraction of the (normalised) parameter range;
+    ``initial``: the first population (PSO, DE: an array (pop_size, n)) or its first
+    row as CMA-ES' mean; None: pymoo's Latin hypercube / random start."""
+    kw = {} if initial is None else {"sampling": np.asarray(initial, dtype=float)}
     if method == "pso":
         m = max(1, pop_size // 10) if reseed is None else reseed
-        return ThesisPSO(pop_size=pop_size, w=w, c1=c1, c2=c2, reseed=m)
+        return ThesisPSO(pop_size=pop_size, w=w, c1=c1, c2=c2, reseed=m, **kw)
     if method == "cma":
-        return CMAES(popsize=pop_size, sigma=sigma, normalize=True)
+        x0 = None if initial is None else np.asarray(initial, dtype=float)[0]
+        return CMAES(popsize=pop_size, sigma=sigma, normalize=True, x0=x0)
     if method == "de":
-        return DE(pop_size=pop_size, variant="DE/rand/1/bin", CR=0.9, F=0.8)
+        return DE(pop_size=pop_size, variant="DE/rand/1/bin", CR=0.9, F=0.8, **kw)
     raise ValueError(f"unknown method {method!r} (known: {', '.join(METHODS)})")
 
 
@@ -96,13 +100,21 @@ class OptimizationResult:
 
 def minimize(evaluate: Callable, lower, upper, budget: int, method: str = "pso",
              pop_size: int = 20, seed: int = 0, callback: Callable | None = None,
-             **options) -> OptimizationResult:
+             start=None, **options) -> OptimizationResult:
     """Minimise ``evaluate(X, iteration) -> F`` (a batch of rows -> objectives) over the box
     [lower, upper] with at most ``budget`` evaluations rounded up to whole batches.
-    ``options`` go to :func:`make_algorithm`; ``callback(row)`` gets each history row."""
+    ``start``: a point made a member of the first population (the others uniform random,
+    seeded; CMA-ES: its initial mean), e.g. the naive toolpath, so the result is never
+    worse than it.  ``options`` go to :func:`make_algorithm`; ``callback(row)`` gets each
+    history row."""
     lower = np.asarray(lower, dtype=float)
     upper = np.asarray(upper, dtype=float)
     problem = Problem(n_var=len(lower), n_obj=1, xl=lower, xu=upper)
+    if start is not None:
+        rng = np.random.default_rng(seed)
+        initial = lower + rng.random((pop_size, len(lower))) * (upper - lower)
+        initial[0] = np.clip(start, lower, upper)
+        options = {**options, "initial": initial}
     algo = make_algorithm(method, pop_size, **options)
     algo.setup(problem, seed=seed, verbose=False)
     n_eval, it = 0, 0

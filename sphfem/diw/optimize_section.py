@@ -17,6 +17,9 @@ OPTIMIZE = register_section(Section("optimize", (
     Param("population", int, 20, ge=2, doc="members per iteration (swarm size)"),
     Param("seed", int, 0, ge=0, doc="random seed of the optimiser (a resumed run retraces "
                                     "the interrupted one with it)"),
+    Param("start_naive", bool, True,
+          doc="make the naive toolpath (all delta = 0) a member of the first population, "
+              "so the result is never worse than it (false: the thesis' all-random start)"),
     Param("inertia", float, 0.7298, ge=0.0, doc="PSO inertia weight w"),
     Param("c1", float, 1.49618, ge=0.0, doc="PSO cognitive coefficient C1 (personal best)"),
     Param("c2", float, 1.49618, ge=0.0, doc="PSO social coefficient C2 (global best)"),
