@@ -3,7 +3,9 @@
 * the force pass under a projection method runs without the delta-SPH term, so the
   renormalised density gradient (:func:`sphfem.fluid.passes.density_gradient`) is not
   computed (it feeds only ``drho``, which the projection does not use; the density is a
-  summation there), while the accelerations stay bit-identical; WCSPH still computes it.
+  summation there), while the accelerations stay bit-identical; WCSPH still computes it;
+* the DFSPH divergence solve's warm start (off by default): half the last step's dt kappa^v
+  by particle id, independent of the new dt, applied only where the flow compresses.
 """
 
 from __future__ import annotations
@@ -60,3 +62,37 @@ def test_wcsph_still_computes_the_density_gradient(monkeypatch):
     s = _solver("wcsph", delta=0.1)
     s.step(1e-4)
     assert calls
+
+
+def test_dfsph_divergence_warm_start_is_half_the_last_velocity_change(monkeypatch):
+    """The divergence solve's warm start (off by default; see the module docstring) takes
+    half of the last step's kappa^v (Bender & Koschier 2017; SPlisHSPlasH's
+    warmstartDivergenceSolve), looked up by particle id and kept as dt kappa^v: the velocity
+    change it applies does not depend on the new step's dt, and only particles whose flow
+    compresses (D_i > 0) get it."""
+    from sphfem.fluid import pressure_dfsph_bender2017 as dfsph
+    from sphfem.fluid import projection
+    from sphfem.particles import FLUID
+
+    monkeypatch.setattr(dfsph, "WARM_FRACTION_DIVERGENCE", 0.5)
+    s = _solver("dfsph")
+    for _ in range(4):
+        s.step(2e-3)
+    st = s.pressure_state
+    w = projection.prepare(s, st)
+    fl = s.p.kind == FLUID
+    stored = st.warm_v.get(s.p.id)
+    assert stored[fl].max() > 0.0 and stored.min() >= 0.0  # compressed somewhere, clamped
+    v0 = s.p.v.copy()
+    projection.density_rate(v0, w.M, s.p.kind, s.nbrs.offsets, w.nbj, w.grad, w.cnt, w.rate)
+    expanding = fl & (w.rate <= 0.0)
+    dv = []
+    for dt in (1e-3, 3e-3):
+        s.p.v[:] = v0
+        dfsph.warm_start_divergence(s, st, w, dt)
+        expect = 0.5 * stored[fl] / (dt * w.rho[fl])
+        assert np.allclose(w.Qv[fl], expect, rtol=1e-14, atol=0.0)
+        dv.append(s.p.v - v0)
+    assert np.abs(dv[0]).max() > 0.0 and expanding.any()
+    assert not dv[0][expanding].any()
+    assert np.allclose(dv[0], dv[1], rtol=1e-12, atol=1e-15 * np.abs(dv[0]).max())

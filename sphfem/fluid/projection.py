@@ -431,6 +431,7 @@ class ProjectionState:
     jacobi_lambda: float | None = None
     dt_prev: float | None = None
     warm: IdStore = field(default_factory=IdStore)
+    warm_v: IdStore = field(default_factory=IdStore)  # DFSPH: dt kappa^v of the last step
     work: Work = field(default_factory=Work)
     log: SolveLog = field(default_factory=SolveLog)
     reaction: np.ndarray | None = None
