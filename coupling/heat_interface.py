@@ -487,6 +487,14 @@ class ContactHeatInterface:
         return out
 
     # -- one coupling step ---------------------------------------------------------------
+    @staticmethod
+    def _phi(s_n, rows, cols, w, z, h, n_nodes):
+        """Phi_a(s) of eq. (3) per node for layer thicknesses ``s_n`` (per node)."""
+        a = np.maximum(z[cols] - 0.5 * h[cols], 0.0)
+        b = np.maximum(z[cols] + 0.5 * h[cols], a + 1e-12 * h[cols])
+        return np.bincount(rows, weights=w * cell_mean_erf(a, b, s_n[rows]),
+                           minlength=n_nodes)
+
     def conductance(self, t_w, dt, rows, cols, w, z, h, n_nodes):
         """h_a of eq. (4) [W/(m^2 K)] per node for layer ages ``t_w`` at the start of the
         step: the exact step mean of the similarity flux for the fluid state at the start
@@ -494,10 +502,7 @@ class ContactHeatInterface:
         since T_inf - T_wall = (T_f,a - T_wall) / Phi_a(s_n) holds for the particles'
         temperatures T_f,a at the start (eq. 3) and stays constant in the ideal contact."""
         s_n = np.sqrt(self.alpha_f * np.maximum(t_w, 0.0))
-        a = np.maximum(z[cols] - 0.5 * h[cols], 0.0)
-        b = np.maximum(z[cols] + 0.5 * h[cols], a + 1e-12 * h[cols])
-        phi = np.bincount(rows, weights=w * cell_mean_erf(a, b, s_n[rows]),
-                          minlength=n_nodes)
+        phi = self._phi(s_n, rows, cols, w, z, h, n_nodes)
         mean_inv_sqrt = step_mean_inv_sqrt(t_w, dt)
         with np.errstate(divide="ignore"):
             return np.where(phi > 0, self.k_f * mean_inv_sqrt
@@ -508,11 +513,7 @@ class ContactHeatInterface:
         s_n = sqrt(s2) the layer at the start of the step (0: wetted inside it), ``inv_s``
         the step mean <1/s> (:func:`strained_mean_inv_s`,
         :func:`sphfem.heat.stagnation_layer.integrate_layer`)."""
-        s_n = np.sqrt(np.maximum(s2, 0.0))
-        lo = np.maximum(z[cols] - 0.5 * h[cols], 0.0)
-        hi = np.maximum(z[cols] + 0.5 * h[cols], lo + 1e-12 * h[cols])
-        phi = np.bincount(rows, weights=w * cell_mean_erf(lo, hi, s_n[rows]),
-                          minlength=n_nodes)
+        phi = self._phi(np.sqrt(np.maximum(s2, 0.0)), rows, cols, w, z, h, n_nodes)
         with np.errstate(divide="ignore", invalid="ignore"):
             return np.where(phi > 0, self.k_f * inv_s / (math.sqrt(math.pi) * phi), 0.0)
 

@@ -224,7 +224,7 @@ def run_stagnation(pair, layer: str, strain: float = STAGNATION_STRAIN,
     and the reference the exact Hiemenz w.  Errors at the steps' ends, every 5th step."""
     from coupling.heat_interface import ContactHeatInterface
     from sphfem.fem.heat_transient import TransientHeat, graded_mesh
-    from sphfem.heat.stagnation_layer import stagnation_profile
+    from sphfem.heat.stagnation_layer import stagnation_profile, stagnation_velocity
     from sphfem.heat.strained_contact import strained_contact_fv
 
     (kf, rf, cf), solid, Tf, Tsub = pair
@@ -240,15 +240,12 @@ def run_stagnation(pair, layer: str, strain: float = STAGNATION_STRAIN,
         nu = prandtl * af
         delta = math.sqrt(nu / strain)
         eta, f, _ = stagnation_profile(1)
-        beta = float(eta[-1] - f[-1])
-        a1 = strain * (H / delta - beta) / (H / delta)
+        a1 = strain * (H / delta - float(eta[-1] - f[-1])) / (H / delta)
         w_cache = {}
 
         def velocity(z, _t):  # steady: computed once on the reference's grid
             if "w" not in w_cache:
-                zeta = z / delta
-                w_cache["w"] = -strain * delta * np.where(
-                    zeta < eta[-1], np.interp(zeta, eta, f), zeta - beta)
+                w_cache["w"] = stagnation_velocity(z, strain, delta, 1)
             return w_cache["w"]
     itf = ContactHeatInterface(sub, kf, rf, cf, layer=layer, nu_f=nu)
     xs = np.arange(-H, W + 2 * H, H) + 0.5 * H

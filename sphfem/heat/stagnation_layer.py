@@ -50,7 +50,7 @@ import math
 import numpy as np
 
 __all__ = ["integrate_layer", "layer_J", "outer_strain", "stagnation_profile",
-           "steady_nusselt", "viscous_layer_rate"]
+           "stagnation_velocity", "steady_nusselt", "viscous_layer_rate"]
 
 _ETA_MAX = 12.0
 
@@ -75,6 +75,15 @@ def stagnation_profile(c: int):
     eta = np.linspace(0.0, _ETA_MAX, 12001)
     Y = sol.sol(eta)
     return eta, Y[0], Y[2]
+
+
+def stagnation_velocity(z, a_o: float, delta: float, c: int):
+    """The wall-normal velocity w = -a_o delta f(z / delta) of eq. (1) at heights ``z``
+    (f = eta - beta beyond the table's eta = 12)."""
+    eta, f, _ = stagnation_profile(c)
+    beta = float(eta[-1] - f[-1])
+    zeta = np.asarray(z, float) / delta
+    return -a_o * delta * np.where(zeta < eta[-1], np.interp(zeta, eta, f), zeta - beta)
 
 
 @functools.lru_cache(maxsize=4)

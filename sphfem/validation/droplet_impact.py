@@ -162,20 +162,17 @@ def strained_reference(summary: dict, t_contact: float, window: list[dict]):
     if summary["scene"]["coupling"]["heat"].get("layer") == "strained-viscous":
         # the run's closure reads the outer strain through the Homann layer (eq. 3 of
         # sphfem.heat.stagnation_layer): the reference takes the same flow, resolved
-        from sphfem.heat.stagnation_layer import outer_strain, stagnation_profile
+        from sphfem.heat.stagnation_layer import outer_strain, stagnation_velocity
 
         nu = float(mats[fluid]["mu"]) / float(mats[fluid]["rho0"])
         dx = float(summary["scene"]["sph"]["dx"])
-        eta, f, _ = stagnation_profile(2)
-        beta = float(eta[-1] - f[-1])
 
         def velocity(z, x):
             a1 = strain(x)
             if a1 <= 0.0:
                 return -a1 * z
             a_o, d = (float(v[0]) for v in outer_strain(np.array([a1]), dx, nu, 2))
-            zeta = z / d
-            return -a_o * d * np.where(zeta < eta[-1], np.interp(zeta, eta, f), zeta - beta)
+            return stagnation_velocity(z, a_o, d, 2)
 
     Ti, _ = strained_contact_fv(strain, tw, sh["fluid_initial_temperature_K"], T_s0, *props,
                                 velocity=velocity)
