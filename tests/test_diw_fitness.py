@@ -130,3 +130,90 @@ def test_lag_model_steady_lag_on_a_line():
     np.testing.assert_allclose(v * t[late] - centre[late, 0], 2 * zeta * v * tau, rtol=1e-6)
     np.testing.assert_allclose(centre[:, 1], 0.0, atol=1e-15)
     assert dep.info["stopped_reason"] is None
+
+
+# --- the practitioner's deviation: centreline and edges against the bead's own width ---
+
+
+@pytest.mark.parametrize("half_rows", [1, 4])
+def test_bead_on_the_path_scores_zero_whatever_its_width(half_rows):
+    """A lattice bead 2 k dx wide (centres) centred on the path: the thesis' max deviation
+    is its half-width k dx, the centreline, edge and 'edge' objective are exactly 0, and
+    the nominal width is 2 k dx."""
+    L, dx = 5e-3, H
+    line = DesiredPath([Line((0.0, 0.0), (L, 0.0))])
+    rows = dx * np.arange(-half_rows, half_rows + 1)
+    f = deposit_fitness(bead_on_line(L, rows, dx), H, D, line, objective="edge")
+    assert f["max_dev_D"] == pytest.approx(half_rows * dx / D, rel=1e-12)
+    assert f["width_nominal_D"] == pytest.approx(2 * half_rows * dx / D, rel=1e-12)
+    for key in ("centre_dev_max_D", "centre_dev_mean_D", "edge_dev_max_D",
+                "edge_dev_mean_D", "edge"):
+        assert f[key] == pytest.approx(0.0, abs=1e-12), key
+    assert f["objective"] == f["edge"]
+
+
+def test_offset_bead_deviates_by_its_offset():
+    """The 3-row bead of test_bead_offset_from_a_line shifted by e = 3 h: centreline,
+    outward excess (top row at e + dx, desired edge at dx) and mean edge error are all e;
+    the shortfall on the other side, sqrt(e^2 + (dx/2)^2) - h at most, is smaller."""
+    L, dx, e = 5e-3, H, 3 * H
+    line = DesiredPath([Line((0.0, 0.0), (L, 0.0))])
+    f = deposit_fitness(bead_on_line(L, [-dx, 0.0, dx], dx, y0=e), H, D, line)
+    for key in ("centre_dev_max_D", "centre_dev_mean_D", "edge_dev_max_D",
+                "edge_dev_mean_D", "edge_excess_max_D"):
+        assert f[key] == pytest.approx(e / D, rel=1e-9), key
+    assert f["edge_short_max_D"] <= (math.hypot(e, dx / 2) - H) / D + 1e-12
+
+
+def test_corner_overshoot_beyond_the_bead_edge():
+    """A 3-row bead (half-width dx) following the 90-degree bend, plus its outer rows run on
+    a past the corner along +x: the far outside particle (a, -dx) is sqrt(a^2 + dx^2)
+    from the corner, so the edge deviation is that minus the half-width dx, while the
+    thesis' max deviation counts the half-width too."""
+    path, _ = named_case("bend90")
+    dx, a = H, 2.0 * D
+    rows = [-dx, 0.0, dx]
+    leg1 = bead_on_line(5e-3, rows, dx) - [5e-3, 0.0, 0.0]
+    leg2 = bead_on_line(5e-3, rows, dx)[:, [1, 0, 2]]  # along +y, x = rows
+    over = bead_on_line(a, rows, dx)[bead_on_line(a, rows, dx)[:, 0] > 1.5 * dx]
+    f = deposit_fitness(np.vstack([leg1, leg2, over]), H, D, path)
+    assert f["width_nominal_D"] == pytest.approx(2 * dx / D, rel=1e-9)
+    assert f["max_dev_D"] == pytest.approx(math.hypot(a, dx) / D, rel=1e-9)
+    assert f["edge_excess_max_D"] == pytest.approx((math.hypot(a, dx) - dx) / D, rel=1e-9)
+    assert f["edge_dev_max_D"] == f["edge_excess_max_D"]
+
+
+def test_cut_corner_is_a_shortfall():
+    """A single-row bead that cuts the 90-degree corner along the chord from (-c, 0) to
+    (0, c): no particle lies beyond the (zero) half-width outside, but the corner of the
+    desired path is c / sqrt(2) from the chord, a shortfall of c / sqrt(2) - h."""
+    path, _ = named_case("bend90")
+    c, ds = 3 * D, H / 20
+    leg1 = np.column_stack([np.arange(-5e-3, -c, ds), np.zeros_like(np.arange(-5e-3, -c, ds))])
+    u = np.linspace(0.0, 1.0, int(c * math.sqrt(2) / ds) + 1)
+    chord = np.column_stack([-c * (1 - u), c * u])
+    y2 = np.arange(c + ds, 5e-3 + ds / 2, ds)
+    leg2 = np.column_stack([np.zeros_like(y2), y2])
+    f = deposit_fitness(np.vstack([leg1, chord, leg2]), H, D, path)
+    assert f["width_nominal_D"] == 0.0
+    assert f["edge_excess_max_D"] == pytest.approx(f["max_dev_D"], rel=1e-12)
+    assert f["edge_short_max_D"] == pytest.approx((c / math.sqrt(2) - H) / D, abs=ds / D)
+
+
+def test_gap_is_a_shortfall_of_half_its_length():
+    """The bead of test_gap_in_the_bead: the centreline sample nearest the hole's middle is
+    (next - previous) / 2 from the particles, within the samples' spacing h / 2."""
+    L, dx = 5e-3, H / 2
+    line = DesiredPath([Line((0.0, 0.0), (L, 0.0))])
+    pos = bead_on_line(L, [0.0], dx)
+    pos = pos[(pos[:, 0] < 2e-3 - 1e-12) | (pos[:, 0] > 3e-3 + 1e-12)]
+    hole = np.diff(np.sort(pos[:, 0])).max()
+    f = deposit_fitness(pos, H, D, line)
+    short = f["edge_short_max_D"] * D
+    assert hole / 2 - H - H / 4 - 1e-12 <= short <= hole / 2 - H + 1e-12
+
+
+def test_unknown_objective_raises():
+    line = DesiredPath([Line((0.0, 0.0), (1e-3, 0.0))])
+    with pytest.raises(ValueError, match="objective"):
+        deposit_fitness(np.zeros((1, 3)), H, D, line, objective="width")
