@@ -28,11 +28,14 @@ runs use DFSPH with Weiler et al.'s implicit viscosity in SPlisHSPlasH):
 * **Substrate**: the scene's box wall block, kept within ``substrate_margin`` of the path.
 
 With ``start_dwell`` the nozzle first extrudes at the path's start for that long (priming:
-the ink reaches the substrate before the nozzle moves).  After the path the piston and the
-nozzle stop and the run goes on for ``settle_time``.  The deposit is the ink below the
-outlet plane at the end.  Measured (:attr:`DepositResult.info`): the emitted volume
-against Q t, the ink that left the outlet, the least pair distance at emission, the step
-sizes and the controlling limits.
+the ink reaches the substrate before the nozzle moves).  With ``coast_distance`` c the piston
+stops when the nozzle is c (along its path, at ``nozzle_speed``) from the end, and the nozzle
+coasts on to the end without extruding: a slicer's "coasting" (e.g. Cura's), which lays
+down the ink already between the outlet and the substrate instead of heaping it at the end
+point.  After the path the nozzle stops and the run goes on for ``settle_time``.  The
+deposit is the ink below the outlet plane at the end.  Measured
+(:attr:`DepositResult.info`): the emitted volume against Q t, the ink that left the
+outlet, the least pair distance at emission, the step sizes and the controlling limits.
 """
 
 from __future__ import annotations
@@ -144,7 +147,10 @@ class Nozzle:
             ex.extrusion_speed * math.pi * self.D**2 / 4)
         self.U_b = self.Q / self.area_bore  # piston speed: Q exactly for the lattice
         self.dwell = float(ex.start_dwell)  # extruding at the start before moving
-        self.duration = self.dwell + float(path.duration)  # extrusion ends here
+        self.duration = self.dwell + float(path.duration)  # the nozzle stops here
+        #: extrusion stops here: coast_distance before the path's end (not before the dwell)
+        self.t_stop = max(self.dwell, self.duration - float(ex.coast_distance) / float(
+            ex.nozzle_speed))
         self.ink_material = 0
         self.buffer_material = 0
         self.released = 0  # buffer particles turned into ink
@@ -173,8 +179,8 @@ class Nozzle:
         return np.array([v[0], v[1], 0.0])
 
     def piston(self, t: float) -> float:
-        """Speed of the buffer down the bore at ``t`` (extrusion stops with the path)."""
-        return self.U_b if t < self.duration else 0.0
+        """Speed of the buffer down the bore at ``t`` (extrusion stops at ``t_stop``)."""
+        return self.U_b if t < self.t_stop else 0.0
 
     # -- set-up --------------------------------------------------------------------------
     def particles(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -209,7 +215,7 @@ class Nozzle:
 
     def travel(self, t0: float, t1: float) -> float:
         """Distance the piston moves down the bore between ``t0`` and ``t1``."""
-        T = self.duration
+        T = self.t_stop
         return self.U_b * (min(t1, T) - min(t0, T))
 
     def move(self, ps: ParticleSet, emit: bool = True) -> bool:
@@ -416,7 +422,7 @@ def simulate_deposit(scene, path, out_dir=None) -> DepositResult:
         dt = lim[name]
         if scene.time.dt is not None:
             dt = min(dt, scene.time.dt) if scene.time.cap_dt else scene.time.dt
-        for edge in (noz.dwell, noz.duration):  # steps end at the dwell's and path's end
+        for edge in (noz.dwell, noz.t_stop, noz.duration):  # steps end at each phase's end
             if t < edge:
                 dt = min(dt, edge - t)
         dt = min(dt, t_end - t)
@@ -446,7 +452,7 @@ def simulate_deposit(scene, path, out_dir=None) -> DepositResult:
     Pend = noz.P(t)
     r_axis = np.hypot(ps.x[:, 0] - Pend[0], ps.x[:, 1] - Pend[1])
     leaked = fl & (ps.x[:, 2] >= noz.z_out) & (r_axis > 0.5 * noz.D + 0.5 * scene.sph.dx)
-    t_ext = min(t, noz.duration)
+    t_ext = min(t, noz.t_stop)
     vol = dx**3
     n_fill = noz.n_fill * noz.disc.shape[0]
     diag = solver.diagnostics()

@@ -65,6 +65,12 @@ EXTRUSION = Section("extrusion", (
           doc="the nozzle extrudes at the path's start for this long before it moves "
               "(priming: the first ink reaches the substrate; 0 = start moving at once, the "
               "first ink then hangs from the nozzle until it touches down)"),
+    Param("coast_distance", float, 0.0, unit="m", ge=0.0, quantity="length",
+          doc="extrusion stops when the nozzle is this far (along its path) from the end, "
+              "and the nozzle coasts on to the end (a slicer's coasting): the ink between "
+              "the outlet and the substrate is laid along the path instead of heaping at "
+              "its end; about nozzle_speed times the ink's fall time over the stand-off "
+              "(0 = extrude to the end)"),
     Param("fill_length", float, None, unit="m", positive=True, quantity="length",
           default_doc="the nozzle diameter",
           doc="length of ink column inside the bore, between the outlet and the inflow "
