@@ -14,6 +14,9 @@ The fluid sees a wall particle with mass rho_w V_w (V_w its fixed volume ``vol``
 pressure force is the same symmetric pair form as between fluid particles, and the wall's
 viscosity is taken equal to the fluid particle's (mu_i + mu_j -> 2 mu_i).
 
+``wall_slip`` = "free-slip" / "navier" gives the tangential part of the ghost velocity a
+slip (:mod:`sphfem.fluid.wall_slip`; the default "no-slip" is the above).
+
 Registered as ``[fluid] walls = "adami2012"`` (:mod:`sphfem.fluid.walls`).
 """
 
@@ -23,6 +26,7 @@ import numpy as np
 from numba import njit, prange
 
 from sphfem.fluid.eos import tait_density
+from sphfem.fluid.wall_slip import apply_slip, slip_params
 from sphfem.fluid.walls import WallMethod, register
 from sphfem.kernels import FASTMATH, kernel_f
 from sphfem.neighbors import min_image
@@ -97,13 +101,15 @@ def _wall_state(solver, g) -> None:
     adami_wall_state(p.x, p.v, p.rho, p.p, p.acc, p.kind, nl.offsets, nl.indices, solver.R,
                      solver.kernel_code, solver.period, g, pa.rho0, solver.B, pa.gamma,
                      solver._scratch.vg)
+    apply_slip(solver)  # [fluid] wall_slip (no-slip: nothing)
 
 
 METHOD = register(WallMethod(
     name="adami2012",
     doc="boundary particles of Adami, Hu & Adams (2012): wall pressure extrapolated from "
         "the fluid with the hydrostatic and wall-acceleration term, density from the "
-        "inverse Tait EOS, mirrored (no-slip) ghost velocity",
-    params=(),
+        "inverse Tait EOS, mirrored (no-slip) ghost velocity, or a free / Navier slip of "
+        "its tangential part (wall_slip)",
+    params=slip_params(("walls", ("adami2012",))),
     wall_state=_wall_state,
 ))
