@@ -85,11 +85,13 @@ import math
 import numpy as np
 from numba import njit, prange
 
+from sphfem.fluid.contact_angle_breinlinger2013 import apply_young_normals
 from sphfem.fluid.passes import grad_factor
 from sphfem.fluid.surface import color_gradient_row
 from sphfem.fluid.surface_tension import SurfaceTensionMethod, register
 from sphfem.kernels import FASTMATH, kernel_f
 from sphfem.particles import FLUID
+from sphfem.schema import Param
 from sphfem.smallmat import pair_sep
 
 logger = logging.getLogger(__name__)
@@ -240,10 +242,14 @@ class CSFState:
         self.kbar = np.zeros(n)
 
     def accumulate(self, x, V, rho, kind, offsets, indices, R, sigma, kernel_code, period,
-                   st_sigma, acc):
-        """The three passes: normals, curvature, force (acc += CSF acceleration)."""
+                   st_sigma, acc, adjust_normals=None):
+        """The three passes: normals, curvature, force (acc += CSF acceleration);
+        ``adjust_normals(g)``, if given, edits the colour gradients in place between the
+        first two (the contact angle: :mod:`sphfem.fluid.contact_angle_breinlinger2013`)."""
         csf_normals(x, V, kind, offsets, indices, R, sigma, kernel_code, period, NORMAL_LO,
                     NORMAL_HI, self.g, self.omega)
+        if adjust_normals is not None:
+            adjust_normals(self.g)
         csf_curvature(x, V, kind, offsets, indices, R, sigma, kernel_code, period, TANGENT_MIN,
                       self.g, self.omega, self.kappa)
         csf_force(x, V, rho, kind, offsets, indices, R, sigma, kernel_code, period, st_sigma,
@@ -282,8 +288,15 @@ def _calibrate(pa, m_bar: float, R: float, dim: int):
 def _accelerate(solver, state):
     p, s, nl = solver.p, solver._scratch, solver.nbrs
     state = csf_state(state, p.n, solver.dim)
+    theta = solver.params.st_params.get("csf_contact_angle",
+                                        getattr(solver.params, "csf_contact_angle", None))
+    adjust = None
+    if theta is not None:  # Young's normals at the walls (Breinlinger et al. 2013)
+        def adjust(g):
+            state.beta = apply_young_normals(solver, g, float(theta),
+                                             getattr(state, "beta", None))
     state.accumulate(p.x, s.V, p.rho, p.kind, nl.offsets, nl.indices, solver.R, solver.sigma,
-                     solver.kernel_code, solver.period, solver.st_sigma, p.acc)
+                     solver.kernel_code, solver.period, solver.st_sigma, p.acc, adjust)
     return state
 
 
@@ -295,7 +308,15 @@ METHOD = register(SurfaceTensionMethod(
         "sphfem.fluid.surface_tension_csf), the material's sigma used directly, checked "
         "against the Laplace pressure and Rayleigh's droplet period; needs c0 >= "
         "sqrt(2 pi sigma/(rho0 h)) (else particle-scale surface ripples grow)",
-    params=(),
+    params=(
+        Param("csf_contact_angle", float, None, ge=0.0, le=180.0,
+              when=("surface_tension", ("csf",)),
+              doc="equilibrium contact angle on walls [deg] (through the liquid): the "
+                  "normals of fluid particles within ~R of a wall are turned to Young's "
+                  "direction n_w cos theta + t_w sin theta (Breinlinger et al. 2013, "
+                  "sphfem.fluid.contact_angle_breinlinger2013); unset: walls count as "
+                  "liquid in the normals and the contact line has no condition"),
+    ),
     constant_key=None,
     calibrate=_calibrate,
     accelerate=_accelerate,

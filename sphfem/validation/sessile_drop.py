@@ -76,13 +76,14 @@ def contact_angle(x: np.ndarray, dx: float, y_wall: float = 0.0) -> tuple[float,
 def run_sessile(n_radius: int, theta: float, R0: float = 1e-3, rho0: float = 1000.0,
                 sigma: float = 0.072, Oh: float = 0.2, t_relax: float = T_RELAX,
                 fluid: dict | None = None, samples: int = 12, damping: float | None = None,
-                extra: dict | None = None):
+                extra: dict | None = None, method: str = "akinci"):
     """One drop with ``n_radius`` particles per R0 and prescribed angle ``theta`` [deg];
     returns (final angle, solver, history [(t / t_cap, angle)], fit residual / dx).
     ``damping``: zero the velocities every ``damping`` capillary times (kinetic damping:
     the drop descends to a static equilibrium; the no-slip wall's viscous force, which
     pins the contact line, vanishes with the velocities)."""
     from sphfem.fluid.surface_tension_akinci2013 import CURVATURE_DEFAULT, akinci_c0_pressure
+    from sphfem.fluid.surface_tension_csf import capillary_wave_speed
 
     dx = R0 / n_radius
     R = SUPPORT * dx
@@ -90,15 +91,19 @@ def run_sessile(n_radius: int, theta: float, R0: float = 1e-3, rho0: float = 100
     xf = lattice([-R0, 0.0], [R0, R0], dx)
     xf = xf[np.hypot(xf[:, 0], xf[:, 1]) < R0]
     xw = lattice([-L, -LAYERS * dx], [L, 0.0], dx)
-    # c0: 1 % density change under the largest pressure (Laplace + cohesion's internal)
-    share = (fluid or {}).get("akinci_curvature", CURVATURE_DEFAULT)
-    p_max = akinci_c0_pressure(sigma, rho0, R, dx, 2, R0, share)
-    c0 = math.sqrt(100.0 * p_max / rho0)
+    if method == "akinci":
+        # c0: 1 % density change under the largest pressure (Laplace + cohesion's internal)
+        share = (fluid or {}).get("akinci_curvature", CURVATURE_DEFAULT)
+        p_max = akinci_c0_pressure(sigma, rho0, R, dx, 2, R0, share)
+        c0 = math.sqrt(100.0 * p_max / rho0)
+    else:  # CSF: 1 % under the Laplace pressure, at least the capillary wave speed
+        c0 = max(math.sqrt(100.0 * sigma / (R0 * rho0)),
+                 capillary_wave_speed(sigma, rho0, 0.5 * R))
     mu = Oh * math.sqrt(rho0 * sigma * R0)
     ps = make_particles(xf, xw, dx, rho0)
     par = FluidParams(rho0=rho0, c0=c0, mu=mu, gravity=(0.0, 0.0), delta=0.1,
-                      surface_tension="akinci", sigma=sigma, rho_ratio_band=(0.5, 2.0),
-                      st_params={"akinci_contact_angle": theta, **(fluid or {})},
+                      surface_tension=method, sigma=sigma, rho_ratio_band=(0.5, 2.0),
+                      st_params={f"{method}_contact_angle": theta, **(fluid or {})},
                       **(extra or {}))
     m = (LAYERS + 1) * dx
     s = FluidSolver(ps, R, [-L - m, -m], [L + m, 3 * R0], params=par)

@@ -1,0 +1,132 @@
+"""Static contact angle through the interface normals at the wall (Breinlinger et al. 2013).
+
+Breinlinger, Polfer, Hashibon & Kraft (2013, J. Comput. Phys. 243, 14) impose the
+equilibrium contact angle theta (measured through the liquid) as a boundary condition of
+the interface normal: where the free surface meets a wall, the unit normal out of the
+liquid is
+
+    n_out = n_w cos theta + t_w sin theta,
+
+n_w the wall normal (out of the wall) and t_w the unit vector in the wall's tangent plane
+that points from the liquid across the contact line (theta = 180 deg: n_out = -n_w, a
+drop touching the wall at a point; 90 deg: n_out = t_w).  A curvature computed from these
+normals is then that of an interface meeting the wall at theta, and the capillary force
+drives the contact line towards it.  Here, for every fluid particle i with wall
+neighbours (normals pointing *into* the liquid, as the surface-tension passes use them):
+
+    g_w,i = sum_wall V_b grad_i W_ib            (points into the wall: n_w = -g_w / |g_w|)
+    t_w   = -(g_i - (g_i . n_w) n_w) / |...|     (the tangential part of the inward normal
+                                                  points into the liquid along the wall)
+    nu_i  = -(n_w cos theta + t_w sin theta)     (Young's inward normal)
+    g_i  <- |g_i| normalise((1 - beta_i) g_i / |g_i| + beta_i nu_i),
+    beta_i = smoothstep((|g_w,i| R - a0) / (a1 - a0))
+
+beta fades the condition in with the wall's colour gradient (the first fluid layer above a
+flat wall has |g_w| R ~ 1.3: beta = 1; from the third layer on beta = 0), so it acts within
+about one support radius of the wall and does not switch abruptly as particles move.  The
+magnitude |g_i| is kept (the surface delta of the force models).  A particle whose inward
+normal is along n_w (no tangential part, e.g. under the middle of a drop when the walls
+count as liquid) keeps its normal.  The wall normal comes from the wall particles alone, so
+any wall shape works.
+
+Used by the CSF (``csf_contact_angle``, :mod:`sphfem.fluid.surface_tension_csf`) and the
+Akinci et al. (2013) model (``akinci_wetting = "normals"``); the functions take arrays
+only, so an axisymmetric pass can call them on its own normals.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from sphfem.fluid.passes import grad_factor
+from sphfem.kernels import FASTMATH
+from sphfem.particles import FLUID, WALL
+from sphfem.smallmat import pair_sep
+
+#: the condition fades in with |grad C_wall| R from WALL_LO to WALL_HI (smoothstep)
+WALL_LO, WALL_HI = 0.3, 0.9
+
+
+@njit(cache=True, parallel=True, fastmath=FASTMATH)
+def young_normals(x, V, kind, offsets, indices, R, sigma, kernel_code, period, cos_t, sin_t,
+                  a0, a1, g, beta):
+    """Rotate the inward normals ``g`` (any magnitude, kept) of fluid rows near walls
+    towards Young's direction for the contact angle with cosine/sine ``cos_t``/``sin_t``
+    (module doc); ``beta`` receives the blend weight of every row (0 away from walls and on
+    other rows)."""
+    n, dim = x.shape
+    R2 = R * R
+    fac2 = sigma / (R * R)
+    periodic = False
+    for k in range(dim):
+        periodic |= period[k] > 0.0
+    for i in prange(n):
+        beta[i] = 0.0
+        if kind[i] != FLUID:
+            continue
+        w0 = 0.0
+        w1 = 0.0
+        w2 = 0.0
+        for jj in range(offsets[i], offsets[i + 1]):
+            j = indices[jj]
+            if kind[j] != WALL:
+                continue
+            r0, r1, r2 = pair_sep(x, i, j, dim, period, periodic)
+            d2 = r0 * r0 + r1 * r1 + r2 * r2
+            if d2 >= R2 or d2 == 0.0:
+                continue
+            t = V[j] * grad_factor(np.sqrt(d2), R, fac2, kernel_code)
+            w0 += t * r0
+            w1 += t * r1
+            w2 += t * r2
+        wn = np.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
+        a = (wn * R - a0) / (a1 - a0)
+        if a <= 0.0:
+            continue
+        b = 1.0 if a >= 1.0 else a * a * (3.0 - 2.0 * a)
+        nw0 = -w0 / wn
+        nw1 = -w1 / wn
+        nw2 = -w2 / wn
+        g0 = g[i, 0]
+        g1 = g[i, 1] if dim > 1 else 0.0
+        g2 = g[i, 2] if dim > 2 else 0.0
+        gn = np.sqrt(g0 * g0 + g1 * g1 + g2 * g2)
+        if gn == 0.0:
+            continue
+        gw = g0 * nw0 + g1 * nw1 + g2 * nw2
+        t0 = g0 - gw * nw0
+        t1 = g1 - gw * nw1
+        t2 = g2 - gw * nw2
+        tn = np.sqrt(t0 * t0 + t1 * t1 + t2 * t2)
+        if tn <= 1e-6 * gn:  # normal along the wall normal: no contact-line direction
+            continue
+        beta[i] = b
+        # Young's inward normal -(n_w cos + t_w sin), t_w = -t / |t|
+        m0 = (1.0 - b) * g0 / gn + b * (-nw0 * cos_t + t0 / tn * sin_t)
+        m1 = (1.0 - b) * g1 / gn + b * (-nw1 * cos_t + t1 / tn * sin_t)
+        m2 = (1.0 - b) * g2 / gn + b * (-nw2 * cos_t + t2 / tn * sin_t)
+        mn = np.sqrt(m0 * m0 + m1 * m1 + m2 * m2)
+        if mn == 0.0:
+            continue
+        g[i, 0] = gn * m0 / mn
+        if dim > 1:
+            g[i, 1] = gn * m1 / mn
+        if dim > 2:
+            g[i, 2] = gn * m2 / mn
+
+
+def apply_young_normals(solver, g: np.ndarray, theta_deg: float,
+                        beta: np.ndarray | None = None) -> np.ndarray:
+    """:func:`young_normals` on the solver's particles and list for the angle
+    ``theta_deg``; returns ``beta``."""
+    p, nl = solver.p, solver.nbrs
+    if beta is None or beta.shape[0] != p.n:
+        beta = np.zeros(p.n)
+    th = math.radians(theta_deg)
+    young_normals(p.x, solver._scratch.V, p.kind, nl.offsets, nl.indices, solver.R,
+                  solver.sigma, solver.kernel_code, solver.period, math.cos(th), math.sin(th),
+                  WALL_LO, WALL_HI, g, beta)
+    return beta
