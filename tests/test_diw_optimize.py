@@ -196,6 +196,24 @@ def test_job_hash_shares_cache_across_methods_not_scenes():
     assert job_hash(a.describe()) != job_hash(b.describe())
 
 
+def test_edge_objective_is_part_of_the_job(tmp_path):
+    """[optimize] objective = "edge" reaches the job and its evaluations (the objective is
+    the fitness' edge term) and changes the hash; the default "thesis" leaves the hash of an
+    existing job unchanged (its cache stays valid)."""
+    from sphfem.diw.job import load_job
+
+    a = ToolpathJob("bend90", 0.1, 7e-4, 1e-4, scene_text="[scene]\nname = 'a'\n")
+    e = dataclasses.replace(a, objective="edge")
+    assert "objective" not in a.describe()
+    assert job_hash(e.describe()) != job_hash(a.describe())
+    scene = _lag_scene(tmp_path, 0.0)
+    scene.write_text(scene.read_text() + 'objective = "edge"\n')
+    job, opt, _ = load_job(scene)
+    assert (job.objective, opt.objective) == ("edge", "edge")
+    res = job(job.space.naive())
+    assert res["objective"] == res["edge"] != res["thesis"]
+
+
 def _lag_scene(tmp_path, cost):
     text = (ROOT / "examples/diw/line_reduced.toml").read_text()
     text = text.replace('toolpath = "line"', 'toolpath = "bend90"')

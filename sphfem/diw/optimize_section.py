@@ -25,9 +25,14 @@ OPTIMIZE = register_section(Section("optimize", (
     Param("c2", float, 1.49618, ge=0.0, doc="PSO social coefficient C2 (global best)"),
     Param("reseed", int, None, ge=0, default_doc="population // 10 (at least 1)",
           doc="PSO: members with the poorest fitness re-seeded at random each iteration (M)"),
+    Param("objective", str, "thesis", choices=("thesis", "edge"),
+          doc="what is minimised: thesis = sum (dist/h)^3 over the deposit (eq. 3.47; dist "
+              "includes the bead's half-width); edge = the same form over the distances "
+              "beyond the desired bead of the deposit's own width (particles outside its "
+              "edges, points of its edges and centreline left uncovered; sphfem.diw.fitness)"),
     Param("gap_weight", float, 0.0, ge=0.0,
-          doc="objective = sum (dist/h)^3 (thesis eq. 3.47) + gap_weight sum (gap/h)^3 "
-              "over the stretches of the path the bead leaves uncovered (0: the thesis)"),
+          doc="objective = thesis or edge + gap_weight sum (gap/h)^3 over the stretches "
+              "of the path the bead leaves uncovered (0: none)"),
     Param("leg", float, None, unit="m", positive=True, quantity="length",
           default_doc="5 mm", doc="length of the straight legs of the named toolpath case"),
     Param("radius", float, None, unit="m", positive=True, quantity="length",

@@ -19,7 +19,8 @@ def _pyplot():
     return plt
 
 
-def plot_history(history: list[dict], path, title: str = "") -> None:
+def plot_history(history: list[dict], path, title: str = "",
+                 ylabel: str = "objective (thesis eq. 3.47)") -> None:
     """Best objective of each iteration and best so far against evaluations (log y)."""
     plt = _pyplot()
     n = [r["n_eval"] for r in history]
@@ -27,7 +28,7 @@ def plot_history(history: list[dict], path, title: str = "") -> None:
     ax.semilogy(n, [r["iteration_best"] for r in history], "o", ms=3, label="iteration best")
     ax.semilogy(n, [r["best"] for r in history], "-", label="best so far")
     ax.set_xlabel("evaluations")
-    ax.set_ylabel("objective (thesis eq. 3.47)")
+    ax.set_ylabel(ylabel)
     ax.set_title(title or "fitness history")
     ax.grid(True, which="both", alpha=0.3)
     ax.legend()
@@ -57,6 +58,11 @@ def plot_top_view(job, path, x=None, positions=None, metrics=None, title="") -> 
         text += (f"\nobjective {metrics['objective']:.4g}, max dev "
                  f"{metrics['max_dev_D']:.2f} D, mean {metrics['mean_dev_D']:.2f} D, "
                  f"gaps {metrics['gap_D']:.2f} D")
+        if "edge_dev_max_D" in metrics:
+            text += (f"\nedge dev max {metrics['edge_dev_max_D']:.2f} D, mean "
+                     f"{metrics['edge_dev_mean_D']:.2f} D; centreline max "
+                     f"{metrics['centre_dev_max_D']:.2f} D, mean "
+                     f"{metrics['centre_dev_mean_D']:.2f} D")
     ax.set_title(text, fontsize=9)
     ax.set_xlabel("x [mm]")
     ax.set_ylabel("y [mm]")
@@ -74,7 +80,10 @@ def write_report(out, job, history, best_x, finals: dict) -> list[Path]:
     out = Path(out)
     files = []
     if history:
-        plot_history(history, out / "fitness_history.png", title=f"{job.case}: fitness")
+        label = {"thesis": "objective (thesis eq. 3.47)",
+                 "edge": "objective (edge: beyond the desired bead)"}
+        plot_history(history, out / "fitness_history.png", title=f"{job.case}: fitness",
+                     ylabel=label.get(getattr(job, "objective", "thesis"), "objective"))
         files.append(out / "fitness_history.png")
     for name, x in (("naive", None), ("best", best_x)):
         fr = finals.get(name, {})
