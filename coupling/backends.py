@@ -99,7 +99,8 @@ class FEMBackend:
     """The FEM substrate (:class:`sphfem.fem.FEMSubstrate`, K factorised once) as a backend.
 
     ``surface``: facet group the sensor forces act on; ``temperature_map``: "mls",
-    "shepard", "nearest" (:class:`coupling.transfer.TemperatureMap`) or "off" (no thermal
+    "shepard", "nearest" (:class:`coupling.transfer.TemperatureMap`), "nodes" (the
+    temperatures come at :attr:`temperature_targets` themselves) or "off" (no thermal
     load); ``R``, ``kernel``: the SPH support radius and kernel of the map.  P1 meshes take
     temperatures at the vertices, P2 at every scalar dof.
     """
@@ -149,7 +150,16 @@ class FEMBackend:
                             int(ft.clipped.sum()))
         self.timings["transfer"] += time.perf_counter() - t1
         self._T_nodes = None
-        if T is not None and self.temperature_map != "off":
+        if T is not None and self.temperature_map == "nodes":
+            # the temperatures are already at the targets (a substrate heat field on the
+            # same nodes, coupling.substrate_heat): copied, no particle map to build
+            T = np.asarray(T, float)
+            if T.shape != (len(self.temperature_targets),):
+                raise ValueError(f"temperature_map = 'nodes' takes one temperature per "
+                                 f"substrate node ({len(self.temperature_targets)}), got "
+                                 f"{T.shape}")
+            self._T_nodes = T.copy()
+        elif T is not None and self.temperature_map != "off":
             t2 = time.perf_counter()
             Tp = np.atleast_2d(np.asarray(T_points, float))
             key = (Tp.shape, Tp.tobytes())
@@ -197,6 +207,8 @@ class FEMBackend:
              "surface": self.surface}
         if self._tmap is not None:
             d["temperature_map"] = self._tmap.stats()
+        elif self.temperature_map == "nodes":
+            d["temperature_map"] = {"method": "nodes", "targets": len(self.temperature_targets)}
         if self._forces is not None:
             d["sensors_clipped"] = int(self._forces.clipped.sum())
         return d

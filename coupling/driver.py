@@ -440,7 +440,7 @@ class CouplingModule(PhysicsModule):
 
         self.driver.thermal = build_substrate_heat(sc, cfg, ctx, reg)
         if self.driver.thermal is not None and backend.temperature_map != "off":
-            backend.temperature_map = "nearest"  # the heat field at the nodes, copied
+            backend.temperature_map = "nodes"  # the heat field at the nodes, copied
         region = sensors.region_mask(ps)
         if not region.any():
             raise ValueError(f"coupling: no particle of material {cfg.material!r} in blocks "

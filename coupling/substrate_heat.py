@@ -349,8 +349,8 @@ class SubstrateHeat:
 
     def reading(self, r, targets):
         """The sensor reading ``r`` with the region's temperatures replaced by the heat
-        field at the backend's temperature ``targets`` (the backend then copies them with a
-        nearest-point map, the identity on its own nodes)."""
+        field at the backend's temperature ``targets`` (the backend copies them:
+        ``temperature_map = "nodes"``)."""
         from dataclasses import replace
 
         T = self.nodal_temperatures(targets)

@@ -296,19 +296,32 @@ def particle_cells(X, vol, tree=None, k: int | None = None, chunk: int = 4096) -
     return h
 
 
-def _in_cells(Xt, Xs, h, tree, rtol: float = 1e-6) -> np.ndarray:
-    """True for targets inside the union of the boxes |X - x_j| <= h_j / 2 (per axis)."""
+def _in_cells(Xt, Xs, h, tree=None, rtol: float = 1e-6, chunk: int = 4096) -> np.ndarray:
+    """True for targets inside the union of the boxes |X - x_j| <= h_j / 2 (per axis).
+
+    Each source's box is searched with its own radius (a tree of the targets), so the work
+    and memory follow the true overlaps: one large cell (an isolated particle, whose side
+    completes its volume) does not widen the search of every other particle.  ``tree`` (of
+    the sources) is accepted for the call signature and not needed."""
+    from scipy.spatial import cKDTree
+
     Xt = np.atleast_2d(np.asarray(Xt, float))
-    if len(Xt) == 0:
-        return np.zeros(0, bool)
-    half = 0.5 * h * (1 + rtol)
-    cand = tree.query_ball_point(Xt, float(half.max()), p=np.inf)
-    lens = np.fromiter((len(c) for c in cand), np.int64, len(cand))
-    rows = np.repeat(np.arange(len(Xt)), lens)
-    cols = np.fromiter((j for c in cand for j in c), np.int64, int(lens.sum()))
-    ok = np.all(np.abs(Xt[rows] - Xs[cols]) <= half[cols], axis=1)
+    Xs = np.atleast_2d(np.asarray(Xs, float))
     covered = np.zeros(len(Xt), bool)
-    covered[rows[ok]] = True
+    if len(Xt) == 0 or len(Xs) == 0:
+        return covered
+    half = 0.5 * np.asarray(h, float) * (1 + rtol)
+    ttree = cKDTree(Xt)
+    for a in range(0, len(Xs), chunk):  # bounded candidate arrays
+        b = min(len(Xs), a + chunk)
+        cand = ttree.query_ball_point(Xs[a:b], half[a:b].max(axis=1), p=np.inf)
+        lens = np.fromiter((len(c) for c in cand), np.int64, len(cand))
+        if not lens.sum():
+            continue
+        src = np.repeat(np.arange(a, b), lens)
+        tgt = np.fromiter((i for c in cand for i in c), np.int64, int(lens.sum()))
+        ok = np.all(np.abs(Xt[tgt] - Xs[src]) <= half[src], axis=1)
+        covered[tgt[ok]] = True
     return covered
 
 

@@ -389,3 +389,19 @@ def test_history_is_written_at_vtu_times_and_at_the_end_not_every_solve(tmp_path
     assert len(hist["history"]) == d["solves"]
     rows = (tmp_path / "out" / "substrate" / "probes.csv").read_text().strip().splitlines()
     assert len(rows) == d["solves"] + 1
+
+
+def test_backend_nodes_map_copies_node_temperatures():
+    """temperature_map = "nodes" (the fem-contact substrate heat field, given at the
+    backend's own nodes) is copied as it is; a wrong length is an error."""
+    from coupling.backends import FEMBackend
+
+    sub = quad_substrate(tri=True)
+    be = FEMBackend(sub, "top", "nodes", R=0.1)
+    X = be.temperature_targets
+    T = 300.0 + 5.0 * X[:, 0] - 2.0 * X[:, 1]
+    be.apply(np.array([[0.5, 0.0]]), np.array([[0.0, -1.0]]), X, T, np.ones(len(X)))
+    np.testing.assert_array_equal(be._T_nodes, T)
+    assert be.diagnostics()["temperature_map"]["method"] == "nodes"
+    with pytest.raises(ValueError, match="one temperature per substrate node"):
+        be.apply(np.array([[0.5, 0.0]]), np.array([[0.0, -1.0]]), X[:-1], T[:-1], None)
