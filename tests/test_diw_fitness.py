@@ -181,6 +181,7 @@ def test_corner_overshoot_beyond_the_bead_edge():
     assert f["max_dev_D"] == pytest.approx(math.hypot(a, dx) / D, rel=1e-9)
     assert f["edge_excess_max_D"] == pytest.approx((math.hypot(a, dx) - dx) / D, rel=1e-9)
     assert f["edge_dev_max_D"] == f["edge_excess_max_D"]
+    assert f["edge_dev_s"] == pytest.approx(0.5, abs=1e-12)  # the corner
 
 
 def test_cut_corner_is_a_shortfall():
@@ -198,6 +199,7 @@ def test_cut_corner_is_a_shortfall():
     assert f["width_nominal_D"] == 0.0
     assert f["edge_excess_max_D"] == pytest.approx(f["max_dev_D"], rel=1e-12)
     assert f["edge_short_max_D"] == pytest.approx((c / math.sqrt(2) - H) / D, abs=ds / D)
+    assert f["edge_dev_s"] == pytest.approx(0.5, abs=H / path.length)  # the corner
 
 
 def test_gap_is_a_shortfall_of_half_its_length():

@@ -64,6 +64,10 @@ def run(path, ratio: float, out=None) -> dict:
         "stopped_reason": info["stopped_reason"],
         "max_deviation_D": fit["max_dev_D"],
         "mean_deviation_D": fit["mean_dev_D"],
+        # the practitioner's figures against the bead's own width (sphfem.diw.fitness)
+        **{k: fit[k] for k in ("width_nominal_D", "edge_dev_max_D", "edge_dev_s",
+                               "edge_dev_mean_D", "edge_excess_max_D", "edge_short_max_D",
+                               "centre_dev_max_D", "centre_dev_mean_D")},
         # bend90: the corner is at the origin after the leg along +x
         "corner_overshoot_D": (float(x[:, 0].max() / D) if len(x) and
                                scene.extrusion.toolpath == "bend90" else None),
@@ -104,7 +108,8 @@ def top_view(path, rows, out) -> Path:
         ax.scatter(x[:, 0] * 1e3, x[:, 1] * 1e3, s=1.5, c=x[:, 2] / D, cmap="viridis")
         ax.plot(line[:, 0] * 1e3, line[:, 1] * 1e3, "r--", lw=1)
         ax.set_aspect("equal")
-        ax.set_title(f"D/dx = {row['D_over_dx']:g}: max dev {row['max_deviation_D']:.2f} D")
+        ax.set_title(f"D/dx = {row['D_over_dx']:g}: max dev {row['max_deviation_D']:.2f} D, "
+                     f"edge {row['edge_dev_max_D']:.2f} D", fontsize=9)
         ax.set_xlabel("x [mm]")
     axes[0][0].set_ylabel("y [mm]")
     fig.tight_layout()

@@ -32,7 +32,8 @@ smallest and largest signed offset of the station's particles:
   (corner overshoot, end pile-up, blobs: ``edge_excess_max_D``) and over points q of the
   desired bead's edges and centreline (each piece's offset curves +-w/2 and 0, spaced
   h/2) of the shortfall d(q, nearest particle) - h (cut corners, gaps:
-  ``edge_short_max_D``), the coverage h as in ``gap_D``.  The desired bead has round ends
+  ``edge_short_max_D``), the coverage h as in ``gap_D``; ``edge_dev_s``: the s where
+  it is largest.  The desired bead has round ends
   for the excess and square ends for the shortfall: neither counts a cap of w/2.
 * ``edge_dev_mean_D``: mean over the stations of max(|hi - w/2|, |lo + w/2|), the farther
   edge's distance from its desired place.
@@ -119,8 +120,13 @@ def deposit_fitness(positions, h: float, nozzle_diameter: float, path: DesiredPa
     edge_station = np.maximum(np.abs(hi_f - half), np.abs(lo_f + half))
     excess = np.maximum(dist - half, 0.0)
     tree = cKDTree(xy)
-    d_q, _ = tree.query(edge_samples(path, half, 0.5 * h))
+    q = edge_samples(path, half, 0.5 * h)
+    d_q, _ = tree.query(q)
     short = np.maximum(d_q - h, 0.0)
+    if excess.max() >= short.max():  # where along the path the edge deviation is largest
+        edge_s = float(s[np.argmax(excess)])
+    else:
+        edge_s = float(path.project(q[np.argmax(short)])[1][0])
     edge_term = float(np.sum((excess / h) ** 3) + np.sum((short / h) ** 3))
 
     # continuity: stretches of the path no particle near it covers
@@ -148,6 +154,7 @@ def deposit_fitness(positions, h: float, nozzle_diameter: float, path: DesiredPa
         "edge_dev_mean_D": float(edge_station.mean() / D),
         "edge_excess_max_D": float(excess.max() / D),
         "edge_short_max_D": float(short.max() / D),
+        "edge_dev_s": edge_s,
         "edge": edge_term,
         "gap_D": float(gaps.sum() / D),
         "n_gaps": int(len(gaps)),
