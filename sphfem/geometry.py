@@ -18,12 +18,13 @@ Placement:
   inclusive (11 at 0, 0.1, ..., 1.0), as the Laplacian patch test needs.  Spheres and
   discs take the points of a lattice centred on ``center`` (cell-centred: ``c + (i + 1/2)
   dx``; node-aligned: ``c + i dx``) that lie inside the shape.
-* :func:`poisson_points` -- blue noise for free-surface bodies: scipy's Poisson-disk
-  sampler (``scipy.stats.qmc.PoissonDisk``) on the bounding box, clipped to the shape.  The
+* :func:`poisson_points` -- blue noise for free-surface bodies: a maximal Poisson-disk
+  sample of the bounding box (Bridson's algorithm, drawing exactly the points of
+  ``scipy.stats.qmc.PoissonDisk``, :func:`_poisson_box`), clipped to the shape.  The
   disk radius starts from a calibrated fraction of ``dx`` and is corrected until the count
   is within a few per cent of ``volume / dx^dim``; a few repulsion sweeps then even out
-  the spacing.  Deterministic for a given seed.  (The sampler is pure Python: ~1 s per
-  2000 points in 2D, ~1 s per 1500 points in 3D.)
+  the spacing.  Deterministic for a given seed.  (~0.25 ms per point: ~1 s for the
+  4,000 points of the 3D droplet's bounding box, which took ~15-50 s with scipy's sampler.)
 
 :func:`build_particles` fills every block of a scene: mass ``rho0 * V / n`` (so a block
 carries its exact mass), ``rho = rho0``, ``vol = m / rho``, ``kind``, ``material`` (the
@@ -227,15 +228,94 @@ def lattice_points(shape: Shape, dx: float, dim: int | None = None, *,
 # Poisson disk (blue noise)
 
 
-def _poisson_box(lo, hi, radius: float, rng) -> np.ndarray:
-    from scipy.stats import qmc
+def _poisson_box(lo, hi, radius: float, rng, ncandidates: int = 30) -> np.ndarray:
+    """A maximal Poisson-disk sample of the box ``[lo, hi]`` with disk radius ``radius``:
+    Bridson's algorithm (SIGGRAPH sketches 2007) exactly as ``scipy.stats.qmc.PoissonDisk(d,
+    radius=radius, rng=rng, l_bounds=lo, u_bounds=hi).fill_space()`` (scipy 1.17) draws
+    and tests it, with the same random stream, so the points are bit-identical, but with
+    each centre's ``ncandidates`` candidates tested at once against the grid (one numpy
+    gather instead of one Python call per candidate; ~10-20x faster).
 
-    d = len(lo)
-    try:
-        engine = qmc.PoissonDisk(d, radius=radius, rng=rng, l_bounds=lo, u_bounds=hi)
-    except TypeError:  # scipy < 1.15 names the generator `seed`
-        engine = qmc.PoissonDisk(d, radius=radius, seed=rng, l_bounds=lo, u_bounds=hi)
-    return engine.fill_space()
+    scipy's procedure: a generator spawned from ``rng`` (``rng.spawn(1)``); a grid of cells
+    of side ``radius / sqrt(d)`` holding at most one sample each (stored as float32); a
+    first sample uniform in the box; then, until the pool of active samples is empty, a
+    centre taken out of the pool at random and ``ncandidates`` candidates drawn uniformly in
+    the ball of radius ``2 radius`` around it, each accepted (and added to the pool) when it
+    lies in the box, its cell is empty and no sample of the 5^d cells around it is closer
+    than ``radius``.  Candidates are tested in order, so one is also tested against those of
+    its own batch accepted before it.
+    """
+    from scipy.special import gammainc
+
+    lo = np.asarray(lo, dtype=np.float64)
+    hi = np.asarray(hi, dtype=np.float64)
+    d = lo.shape[0]
+    rng = rng.spawn(1)[0]
+    r2 = radius**2
+    cell = radius / np.sqrt(d)
+    pad = 2  # the 5^d window of a cell never leaves the padded grid
+    shape = np.ceil((hi - lo) / cell).astype(int) + 2 * pad + 1
+    stride = np.r_[np.cumprod(shape[::-1])[:-1][::-1], 1]  # C order
+    grid = np.zeros((int(np.prod(shape)), d), dtype=np.float32)  # cell -> its sample
+    full = np.zeros(grid.shape[0], dtype=bool)  # cell holds a sample
+    win = np.stack(np.meshgrid(*([np.arange(-pad, pad + 1)] * d), indexing="ij"),
+                   axis=-1).reshape(-1, d) @ stride
+
+    def cells(x):
+        return (((x - lo) / cell).astype(int) + pad) @ stride
+
+    first = rng.uniform(lo, hi)
+    out = [first]
+    pool = [first]
+    grid[cells(first)] = first
+    full[cells(first)] = True
+    ball, a, p = radius * 2, d / 2, 1 / d
+    for_all = np.logical_and.reduce
+    while pool:
+        centre = pool.pop(int(rng.integers(len(pool))))
+        x = rng.standard_normal(size=(ncandidates, d))
+        ssq = np.sum(x**2, axis=1)
+        cand = centre + x * (ball * gammainc(a, ssq / 2) ** p / np.sqrt(ssq))[:, None]
+        cand = cand[for_all((cand <= hi) & (cand >= lo), axis=1)]
+        if cand.shape[0] == 0:
+            continue
+        lin = cells(cand)
+        ci, wj = np.nonzero(full[lin[:, None] + win])  # candidate, filled cell of its window
+        free = ~full[lin]
+        if ci.shape[0]:
+            d2 = np.sum(np.square(cand[ci] - grid[lin[ci] + win[wj]]), axis=1)
+            free[ci[d2 < r2]] = False
+        taken = []  # (cell, float32 value as floats) of this batch's accepted candidates
+        for c, i in zip(cand[free], lin[free].tolist(), strict=True):
+            if taken and any(i == j or (_dist2(c, v) < r2 and _within(i, j, stride, pad))
+                             for j, v in taken):
+                continue
+            v = c.astype(np.float32)
+            grid[i] = v
+            full[i] = True
+            taken.append((i, v.tolist()))
+            out.append(c)
+            pool.append(c)
+    return np.array(out)
+
+
+def _dist2(c: np.ndarray, v: list) -> float:
+    """Squared distance of ``c`` and ``v`` summed in axis order (as numpy sums a short
+    axis, so the value is bit-identical to ``np.sum(np.square(c - v))``)."""
+    s = 0.0
+    for a, b in zip(c.tolist(), v, strict=True):
+        s += (a - b) * (a - b)
+    return s
+
+
+def _within(i: int, j: int, stride, pad: int) -> bool:
+    """Cells ``i`` and ``j`` (linear indices, C-order ``stride``) at most ``pad`` apart on
+    every axis."""
+    for s in stride.tolist():
+        if abs(i // s - j // s) > pad:
+            return False
+        i, j = i % s, j % s
+    return True
 
 
 def poisson_points(shape: Shape, dx: float, dim: int | None = None, seed=0, *,
@@ -245,8 +325,7 @@ def poisson_points(shape: Shape, dx: float, dim: int | None = None, seed=0, *,
     The count matches ``volume / dx^dim`` within ``tolerance`` (or ``1/sqrt(target)`` for
     very small blocks, where the count is noisy), the minimum distance is about
     ``0.7-0.8 dx`` and ``relax`` repulsion sweeps even the spacing out.  ``seed`` is an int
-    or a sequence of ints (``numpy.random.default_rng`` semantics).  scipy's sampler is slow
-    (15-50 s for the main job's droplet), so samples are cached on disk
+    or a sequence of ints (``numpy.random.default_rng`` semantics).  Samples are cached on disk
     (:func:`sphfem.cache.cached_array`, key: every parameter and the library versions).
     """
     _check(shape, dx, dim)
