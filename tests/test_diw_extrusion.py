@@ -192,33 +192,88 @@ def test_start_dwell_primes_the_bead():
     assert abs(info["emitted_volume_m3"] - Q * (0.012 + path.duration)) <= layer
 
 
-def test_coasting_stops_extrusion_before_the_end():
-    """coast_distance c: the piston stops when the nozzle is c from the end, so the emitted
-    volume is Q (dwell + duration - c / v) to within one layer; with c = v t_fall (the ink's
-    fall over the stand-off, 9.4 ms here: c = 0.94 mm) the ink in the air is laid along the
-    path instead of heaping at its end: the bead's reach past the end point shrinks (measured
-    0.72 D -> 0.53 D at D/dx = 4) by more than half a spacing, and the path's end stays
-    covered (no shortfall of the desired bead, sphfem.diw.fitness).  Two runs, about 8 s."""
+def test_end_ramp_kinematics():
+    """end_ramp l: the nozzle's speed falls linearly from v to 0 over the last l of the path
+    (which then takes 2 l / v), its velocity is dP/dt, it ends at the path's end, and the
+    flux follows the speed: the emitted volume / Q (extruded_time) is dwell + path time,
+    as without the ramp; coast_distance c stops extrusion where c of the path is left."""
+    from sphfem.diw.extrusion import Nozzle
+
+    L, dwell, ramp, coast = 3e-3, 0.012, 1e-3, 0.4e-3
+    text = REDUCED.read_text().replace(
+        "settle_time = 0.01",
+        f"settle_time = 0.01\nstart_dwell = {dwell}\nend_ramp = {ramp}\ncoast_distance = 0.0")
+    scene = parse_scene_toml(text, source="ramp.toml")
+    v = scene.extrusion.nozzle_speed
+    path = Line([0.0, 0.0], [1.0, 0.0], v, L)
+    noz = Nozzle(scene, path, 0.0, 800.0)
+    assert noz.duration == pytest.approx(dwell + (L - ramp) / v + 2 * ramp / v, rel=1e-12)
+    t = np.linspace(0.0, noz.duration, 4001)
+    x = np.array([noz.P(ti)[0] for ti in t])
+    vx = np.array([noz.V(ti)[0] for ti in t])
+    assert x[-1] == pytest.approx(L, rel=1e-12)
+    assert noz.t_stop == noz.duration  # no coasting: extrusion ends with the ramp, exactly
+    ramp_t = t - (dwell + (L - ramp) / v)
+    on = (ramp_t > 0) & (t < noz.duration)
+    np.testing.assert_allclose(vx[on], v * (1 - ramp_t[on] / (2 * ramp / v)), rtol=1e-9)
+    eps = 1e-8  # central difference of P, exact for the quadratic ramp to rounding
+    mid = t[(t > dwell + eps) & (t < noz.duration - eps)]
+    dxdt = [(noz.P(ti + eps)[0] - noz.P(ti - eps)[0]) / (2 * eps) for ti in mid]
+    np.testing.assert_allclose(dxdt, [noz.V(ti)[0] for ti in mid], atol=1e-6 * v)
+    assert noz.extruded_time(noz.duration + 1.0) == pytest.approx(dwell + L / v, rel=1e-12)
+    noz_c = Nozzle(parse_scene_toml(text.replace("coast_distance = 0.0",
+                                                 f"coast_distance = {coast}"), source="c"),
+                   path, 0.0, 800.0)
+    assert L - noz_c.P(noz_c.t_stop)[0] == pytest.approx(coast, rel=1e-9)
+    assert noz_c.piston(noz_c.t_stop) == 0.0 < noz_c.piston(noz_c.t_stop * (1 - 1e-9))
+
+
+@pytest.fixture(scope="module")
+def path_ends():
+    """A primed 3 mm line (HB ink of the reduced scene, D/dx = 4) ended three ways: a dead
+    stop, coasting over c = v t_fall and a ramp over l = v t_fall (t_fall = 9.4 ms, the
+    ink's fall over the 1.4 mm stand-off); about 12 s."""
     from sphfem.diw.fitness import deposit_fitness
     from sphfem.diw.toolpath import DesiredPath
     from sphfem.diw.toolpath import Line as PathLine
 
     L, dwell, c = 3e-3, 0.012, 0.94e-3
-    reach = {}
-    for coast in (0.0, c):
+    out = {}
+    for name, key in (("stop", "coast_distance = 0"), ("coast", f"coast_distance = {c}"),
+                      ("ramp", f"end_ramp = {c}")):
         text = REDUCED.read_text().replace(
-            "settle_time = 0.01",
-            f"settle_time = 0.01\nstart_dwell = {dwell}\ncoast_distance = {coast}")
-        scene = parse_scene_toml(text, source="coast.toml")
+            "settle_time = 0.01", f"settle_time = 0.01\nstart_dwell = {dwell}\n{key}")
+        scene = parse_scene_toml(text, source=f"{name}.toml")
         v = scene.extrusion.nozzle_speed
-        path = Line([0.0, 0.0], [1.0, 0.0], v, L)
-        res = simulate_deposit(scene, path)
-        info, D, dx = res.info, res.nozzle_diameter, res.info["dx"]
+        res = simulate_deposit(scene, Line([0.0, 0.0], [1.0, 0.0], v, L))
+        fit = deposit_fitness(res.positions, res.h, res.nozzle_diameter,
+                              DesiredPath([PathLine((0, 0), (L, 0))]))
+        out[name] = (res, fit, res.positions[:, 0].max() - L)
+    return L, dwell, c, out
+
+
+def test_path_end_volumes(path_ends):
+    """Emitted volume within one layer of Q (dwell + T - c / v) when coasting and of
+    Q (dwell + T) with the ramp (the flux follows the nozzle's speed), as with a dead
+    stop; no run stopped."""
+    L, dwell, c, out = path_ends
+    for name, (res, _, _) in out.items():
+        info = res.info
         assert info["stopped_reason"] is None
-        Q = info["flow_rate_m3_per_s"]
-        layer = info["bore_points"] * dx**3
-        assert abs(info["emitted_volume_m3"] - Q * (dwell + path.duration - coast / v)) <= layer
-        f = deposit_fitness(res.positions, res.h, D, DesiredPath([PathLine((0, 0), (L, 0))]))
-        assert f["edge_short_max_D"] == 0.0
-        reach[coast] = res.positions[:, 0].max() - L
-    assert reach[c] < reach[0.0] - 0.5 * dx
+        v = 0.1
+        layer = info["bore_points"] * info["dx"] ** 3
+        expect = info["flow_rate_m3_per_s"] * (dwell + L / v - (c / v if name == "coast" else 0))
+        assert abs(info["emitted_volume_m3"] - expect) <= layer, name
+
+
+def test_coasting_and_ramp_shorten_the_reach_past_the_end(path_ends):
+    """Ink in the air when the nozzle stops dead lands past the end point.  Coasting (lay
+    the ink in the air along the path) and the ramp (the ink leaves with the nozzle's
+    dwindling speed) both shorten the bead's reach past the end by more than half a spacing
+    (measured 0.72 D dead stop, 0.53 D coasting at D/dx = 4 with this yield-stress ink;
+    the ramp below), and the end stays covered (no shortfall of the desired bead)."""
+    _, _, _, out = path_ends
+    dx = out["stop"][0].info["dx"]
+    for name in ("coast", "ramp"):
+        assert out[name][1]["edge_short_max_D"] == 0.0, name
+        assert out[name][2] < out["stop"][2] - 0.5 * dx, name

@@ -32,10 +32,15 @@ the ink reaches the substrate before the nozzle moves).  With ``coast_distance``
 stops when the nozzle is c (along its path, at ``nozzle_speed``) from the end, and the nozzle
 coasts on to the end without extruding: a slicer's "coasting" (e.g. Cura's), which lays
 down the ink already between the outlet and the substrate instead of heaping it at the end
-point.  After the path the nozzle stops and the run goes on for ``settle_time``.  The
-deposit is the ink below the outlet plane at the end.  Measured
-(:attr:`DepositResult.info`): the emitted volume against Q t, the ink that left the
-outlet, the least pair distance at emission, the step sizes and the controlling limits.
+point.  With ``end_ramp`` l the nozzle decelerates uniformly to rest over the last l of its
+path (taking 2 l / v instead of l / v) and the flux follows its speed, Q v(t) / v, so the
+bead keeps its cross-section while the ink leaving the outlet slows down with the nozzle:
+the forward speed that ink still in the air carries past the end point goes to zero (a
+printer's deceleration with its flow tied to the feed rate).  After the path the nozzle
+stops and the run goes on for ``settle_time``.  The deposit is the ink below the outlet
+plane at the end.  Measured (:attr:`DepositResult.info`): the emitted volume against
+Q t, the ink that left the outlet, the least pair distance at emission, the step sizes
+and the controlling limits.
 """
 
 from __future__ import annotations
@@ -147,10 +152,17 @@ class Nozzle:
             ex.extrusion_speed * math.pi * self.D**2 / 4)
         self.U_b = self.Q / self.area_bore  # piston speed: Q exactly for the lattice
         self.dwell = float(ex.start_dwell)  # extruding at the start before moving
-        self.duration = self.dwell + float(path.duration)  # the nozzle stops here
-        #: extrusion stops here: coast_distance before the path's end (not before the dwell)
-        self.t_stop = max(self.dwell, self.duration - float(ex.coast_distance) / float(
-            ex.nozzle_speed))
+        # path time tau (the path's own clock, constant speed v0) against run time t:
+        # tau = t - dwell up to tau_r, then the nozzle decelerates uniformly to rest over
+        # the last end_ramp of the path, which takes T_r = 2 end_ramp / v0 (module docstring)
+        v0 = float(ex.nozzle_speed)
+        self.T_path = float(path.duration)
+        ramp = min(float(ex.end_ramp), v0 * self.T_path)
+        self.tau_r = self.T_path - ramp / v0
+        self.T_r = 2.0 * ramp / v0
+        self.duration = self.dwell + self.tau_r + self.T_r  # the nozzle stops here
+        #: extrusion stops here: when the nozzle is coast_distance from the path's end
+        self.t_stop = self.t_of_tau(max(self.T_path - float(ex.coast_distance) / v0, 0.0))
         self.ink_material = 0
         self.buffer_material = 0
         self.released = 0  # buffer particles turned into ink
@@ -164,23 +176,56 @@ class Nozzle:
         self.gravity = np.zeros(3)  # acceleration of a released particle until evaluated
 
     # -- kinematics ----------------------------------------------------------------------
+    def tau(self, t: float) -> tuple[float, float]:
+        """Path time tau(t) and its rate dtau/dt: 0 during the dwell, t - dwell until
+        tau_r, then w - w^2 / (2 T_r) past tau_r (w = t - dwell - tau_r: the speed falls
+        linearly to 0 at ``duration``), T_path after."""
+        u = t - self.dwell
+        if u <= 0.0:
+            return 0.0, 0.0
+        if u <= self.tau_r:
+            return u, 1.0
+        w = u - self.tau_r
+        if w >= self.T_r:
+            return self.T_path, 0.0
+        return self.tau_r + w - w * w / (2.0 * self.T_r), 1.0 - w / self.T_r
+
+    def t_of_tau(self, tau: float) -> float:
+        """Run time at which the nozzle reaches path time ``tau`` (inverse of :meth:`tau`)."""
+        if tau <= self.tau_r or self.T_r == 0.0:
+            return self.dwell + min(tau, self.tau_r)
+        r = max(self.T_path - tau, 0.0) / (0.5 * self.T_r)  # share of the ramp still ahead
+        return self.duration - self.T_r * math.sqrt(r)
+
     def P(self, t: float) -> np.ndarray:
-        """Nozzle point (x, y, z0) at ``t``: at the path's start during the dwell, at
-        path.position(t - dwell) while moving, at the path's end after ``duration``."""
-        tp = min(max(t - self.dwell, 0.0), self.duration - self.dwell)
-        xy = np.asarray(self.path.position(tp), float)
+        """Nozzle point (x, y, z0) at ``t``: path.position(tau(t))."""
+        xy = np.asarray(self.path.position(self.tau(t)[0]), float)
         return np.array([xy[0], xy[1], self.z0])
 
     def V(self, t: float) -> np.ndarray:
-        """Nozzle velocity at ``t`` (zero during the dwell and after ``duration``)."""
-        if t < self.dwell or t >= self.duration:
+        """Nozzle velocity at ``t``: path.velocity(tau) dtau/dt (zero during the dwell and
+        after ``duration``)."""
+        tau, rate = self.tau(t)
+        if rate == 0.0:
             return np.zeros(3)
-        v = np.asarray(self.path.velocity(t - self.dwell), float)
+        v = np.asarray(self.path.velocity(tau), float) * rate
         return np.array([v[0], v[1], 0.0])
 
+    def flux_factor(self, t: float) -> float:
+        """Q(t) / Q: 1 during the dwell, dtau/dt while moving (the flux follows the nozzle's
+        speed, so the bead keeps its cross-section through the ramp), 0 from ``t_stop``."""
+        if t >= self.t_stop:
+            return 0.0
+        return 1.0 if t < self.dwell else self.tau(t)[1]
+
+    def extruded_time(self, t: float) -> float:
+        """Integral of the flux factor over [0, t] (emitted volume / Q)."""
+        t = min(t, self.t_stop)
+        return min(t, self.dwell) + self.tau(t)[0]
+
     def piston(self, t: float) -> float:
-        """Speed of the buffer down the bore at ``t`` (extrusion stops at ``t_stop``)."""
-        return self.U_b if t < self.t_stop else 0.0
+        """Speed of the buffer down the bore at ``t``: U_b Q(t) / Q."""
+        return self.U_b * self.flux_factor(t)
 
     # -- set-up --------------------------------------------------------------------------
     def particles(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
@@ -215,8 +260,7 @@ class Nozzle:
 
     def travel(self, t0: float, t1: float) -> float:
         """Distance the piston moves down the bore between ``t0`` and ``t1``."""
-        T = self.t_stop
-        return self.U_b * (min(t1, T) - min(t0, T))
+        return self.U_b * (self.extruded_time(t1) - self.extruded_time(t0))
 
     def move(self, ps: ParticleSet, emit: bool = True) -> bool:
         """Move the nozzle to ``target_t`` (if set) and, with ``emit``, release the buffer
@@ -422,8 +466,9 @@ def simulate_deposit(scene, path, out_dir=None) -> DepositResult:
         dt = lim[name]
         if scene.time.dt is not None:
             dt = min(dt, scene.time.dt) if scene.time.cap_dt else scene.time.dt
-        for edge in (noz.dwell, noz.t_stop, noz.duration):  # steps end at each phase's end
-            if t < edge:
+        # steps end at each phase's end
+        for edge in (noz.dwell, noz.dwell + noz.tau_r, noz.t_stop, noz.duration):
+            if edge - t > 1e-6 * t_end:  # (a remainder this small is no phase)
                 dt = min(dt, edge - t)
         dt = min(dt, t_end - t)
         noz.set_velocities(ctx.particles, t, dt)
@@ -452,7 +497,7 @@ def simulate_deposit(scene, path, out_dir=None) -> DepositResult:
     Pend = noz.P(t)
     r_axis = np.hypot(ps.x[:, 0] - Pend[0], ps.x[:, 1] - Pend[1])
     leaked = fl & (ps.x[:, 2] >= noz.z_out) & (r_axis > 0.5 * noz.D + 0.5 * scene.sph.dx)
-    t_ext = min(t, noz.t_stop)
+    t_ext = noz.extruded_time(t)
     vol = dx**3
     n_fill = noz.n_fill * noz.disc.shape[0]
     diag = solver.diagnostics()

@@ -71,6 +71,11 @@ EXTRUSION = Section("extrusion", (
               "the outlet and the substrate is laid along the path instead of heaping at "
               "its end; about nozzle_speed times the ink's fall time over the stand-off "
               "(0 = extrude to the end)"),
+    Param("end_ramp", float, 0.0, unit="m", ge=0.0, quantity="length",
+          doc="the nozzle decelerates uniformly to rest over this last distance of its path "
+              "and the flux follows its speed (the bead keeps its cross-section), so the "
+              "ink leaving the outlet near the end carries no speed past the end point "
+              "(0 = the nozzle stops dead at the end)"),
     Param("fill_length", float, None, unit="m", positive=True, quantity="length",
           default_doc="the nozzle diameter",
           doc="length of ink column inside the bore, between the outlet and the inflow "
