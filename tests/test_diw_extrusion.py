@@ -270,8 +270,8 @@ def test_coasting_and_ramp_shorten_the_reach_past_the_end(path_ends):
     """Ink in the air when the nozzle stops dead lands past the end point.  Coasting (lay
     the ink in the air along the path) and the ramp (the ink leaves with the nozzle's
     dwindling speed) both shorten the bead's reach past the end by more than half a spacing
-    (measured 0.72 D dead stop, 0.53 D coasting at D/dx = 4 with this yield-stress ink;
-    the ramp below), and the end stays covered (no shortfall of the desired bead)."""
+    (measured at D/dx = 4 with this yield-stress ink: 0.72 D dead stop, 0.53 D coasting,
+    0.45 D ramp), and the end stays covered (no shortfall of the desired bead)."""
     _, _, _, out = path_ends
     dx = out["stop"][0].info["dx"]
     for name in ("coast", "ramp"):
