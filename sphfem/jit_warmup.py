@@ -23,13 +23,28 @@ that many entries valid for the current source code and CPU (numba's own validit
 source stamp, byte-code hash, CPU magic), so an edited source file or a cleared cache makes
 the scene cold again.  Anything unexpected (a numba without these internals, a child that
 fails) leaves the parent to compile as before: slower and larger, never wrong.
+
+Compiling on every core.  numba compiles one kernel at a time in one process (its front
+end is Python and holds the GIL), so a first run of the droplet job spent 3-4 CPU-minutes
+on one core.  For scenes whose kernels are *recorded* in ``jit_signatures.json`` (the
+kernel key of the scene -> every cached dispatcher it calls, its argument types pickled,
+and the seconds its compilation took; written by ``python -m sphfem.jit_warmup --record
+SCENE``), :func:`warm_up` compiles the recorded signatures in one child per core
+(``dispatcher.compile(signature)``; the kernels split by their recorded seconds, longest
+first, all overloads of a kernel in one child so that no two children write one cache
+index) and then writes the manifest; only when that leaves the scene cold (a kernel whose
+types do not unpickle, a failed child) does the coarsened-copy child run as well.  The
+record is only a list of types: the code compiled is the installed code, and a record of
+another numba or Python version is ignored.
 """
 
 from __future__ import annotations
 
+import base64
 import json
 import logging
 import os
+import pickle
 import subprocess
 import sys
 import tempfile
@@ -40,6 +55,11 @@ logger = logging.getLogger(__name__)
 
 #: environment switch: "0" turns the warm-up off
 ENV = "SPHFEM_JIT_WARMUP"
+#: environment: compile processes of a recorded warm-up (default: the CPUs this process
+#: may use)
+ENV_WORKERS = "SPHFEM_JIT_WORKERS"
+#: the recorded kernels of shipped scenes (see the module docstring)
+SIGNATURES = Path(__file__).with_name("jit_signatures.json")
 
 
 def kernel_key(scene) -> dict:
@@ -133,6 +153,127 @@ def used_kernels() -> dict:
     return out
 
 
+def record_key(scene) -> str:
+    """The key of ``scene``'s entry in :data:`SIGNATURES`: its kernel choices, numba's and
+    Python's versions (pickled numba types are read back by the same numba only)."""
+    import numba
+
+    from sphfem.cache import cache_key
+
+    return cache_key({"kernels": kernel_key(scene), "numba": numba.__version__,
+                      "python": list(sys.version_info[:2])})
+
+
+def recorded(scene, path: Path = SIGNATURES) -> list[dict] | None:
+    """The recorded kernels of ``scene`` (``[{"kernel": "module:attribute", "sigs": [...],
+    "s": seconds}, ...]``) or None."""
+    try:
+        return json.loads(path.read_text())["scenes"][record_key(scene)]["kernels"]
+    except (OSError, ValueError, KeyError):
+        return None
+
+
+def _record_entries(seconds: dict) -> list[dict]:
+    """The cached dispatchers this process has called: their signatures (pickled, base64)
+    and ``seconds[name]``, the seconds of their outermost compilations."""
+    out = []
+    for m, a, d in _dispatchers():
+        if not d.overloads:
+            continue
+        name = f"{m}:{a}"
+        try:
+            sigs = [base64.b64encode(pickle.dumps(tuple(sig))).decode() for sig in d.signatures]
+        except Exception:  # a type that does not pickle: left to the scene's own run
+            continue
+        out.append({"kernel": name, "sigs": sigs, "s": round(seconds.get(name, 0.0), 3)})
+    return sorted(out, key=lambda e: -e["s"])
+
+
+def split(entries: list[dict], workers: int) -> list[list[dict]]:
+    """``entries`` in ``workers`` lists of about equal recorded seconds (longest first,
+    each to the least loaded list)."""
+    bins = [[] for _ in range(max(1, workers))]
+    load = [0.0] * len(bins)
+    for e in sorted(entries, key=lambda e: -e["s"]):
+        k = load.index(min(load))
+        bins[k].append(e)
+        load[k] += e["s"]
+    return [b for b in bins if b]
+
+
+def _workers() -> int:
+    try:
+        return max(1, int(os.environ[ENV_WORKERS]))
+    except (KeyError, ValueError):
+        try:
+            return max(1, len(os.sched_getaffinity(0)))
+        except AttributeError:
+            return os.cpu_count() or 1
+
+
+def _compile_recorded(scene, entries: list[dict], progress: bool) -> dict:
+    """Compile ``entries`` in :func:`_workers` child processes; write the manifest when
+    every child succeeded.  Returns ``{"workers", "ok", "compiled", "failed"}``."""
+    from sphfem.output import write_json
+
+    groups = split(entries, _workers())
+    info = {"workers": len(groups), "ok": False, "compiled": 0, "failed": 0}
+    with tempfile.TemporaryDirectory(prefix="sphfem-jit-") as tmp:
+        procs = []
+        for i, g in enumerate(groups):
+            f = Path(tmp) / f"group{i}.json"
+            f.write_text(json.dumps({"kernels": g, "tag": f"{i + 1}/{len(groups)}",
+                                     "progress": progress}))
+            procs.append(subprocess.Popen(
+                [sys.executable, "-m", "sphfem.jit_warmup", "--compile", str(f)],
+                stdout=subprocess.PIPE, stderr=None if progress else subprocess.DEVNULL,
+                text=True))
+        ok = True
+        for p in procs:
+            out, _ = p.communicate()
+            try:
+                r = json.loads(out.strip().splitlines()[-1])
+                info["compiled"] += r["compiled"]
+                info["failed"] += r["failed"]
+            except (ValueError, IndexError, KeyError):
+                ok = False
+            ok &= p.returncode == 0
+    info["ok"] = ok and info["failed"] == 0
+    if info["ok"]:
+        manifest = manifest_path(scene)
+        manifest.parent.mkdir(parents=True, exist_ok=True)
+        write_json(manifest, {"kernels": {e["kernel"]: len(e["sigs"]) for e in entries},
+                              "recorded": True})
+    return info
+
+
+def _compile_group(path: str) -> int:
+    """Child of :func:`_compile_recorded`: compile the kernels of ``path``; print one JSON
+    line (compiled and failed signatures, seconds)."""
+    import importlib
+
+    job = json.loads(Path(path).read_text())
+    t0 = time.perf_counter()
+    done = failed = 0
+    for e in job["kernels"]:
+        t1 = time.perf_counter()
+        try:
+            mname, aname = e["kernel"].split(":")
+            disp = getattr(importlib.import_module(mname), aname)
+            for sig in e["sigs"]:
+                disp.compile(pickle.loads(base64.b64decode(sig)))
+                done += 1
+        except Exception as exc:  # left to the scene's run (or the coarsened child)
+            failed += 1
+            logger.info("warm-up: %s not compiled: %s", e["kernel"], exc)
+            continue
+        if job.get("progress"):
+            print(f"sphfem:   [{job['tag']}] {e['kernel']} "
+                  f"({time.perf_counter() - t1:.1f} s)", file=sys.stderr, flush=True)
+    print(json.dumps({"compiled": done, "failed": failed, "s": time.perf_counter() - t0}))
+    return 0
+
+
 def is_warm(scene) -> bool:
     """True when numba's cache holds every kernel the manifest of ``scene`` lists."""
     import importlib
@@ -170,6 +311,22 @@ def warm_up(scene, coarsen: float = 3.0, steps: int = 100, progress: bool = Fals
 
     t0 = time.perf_counter()
     info = {"cold": True, "ok": False}
+    entries = recorded(scene)
+    if entries:
+        was = report.enabled()
+        report.enable(progress or was)
+        try:
+            n = sum(len(e["sigs"]) for e in entries)
+            with report.stage(f"compiling the scene's {len(entries)} recorded numba kernels "
+                              f"({n} signatures) in {min(_workers(), len(entries))} "
+                              f"processes (first run only; later runs load them from the "
+                              f"cache)"):
+                info["recorded"] = _compile_recorded(scene, entries, progress or was)
+        finally:
+            report.enable(was)
+        if info["recorded"]["ok"] and is_warm(scene):
+            info.update(ok=True, s=time.perf_counter() - t0)
+            return info
     with tempfile.TemporaryDirectory(prefix="sphfem-jit-") as tmp:
         src = Path(tmp) / "scene.json"
         src.write_text(json.dumps({"scene": coarsened(scene, coarsen, steps),
@@ -210,6 +367,7 @@ def _child(path: str) -> int:
 
     job = json.loads(Path(path).read_text())
     scene = parse_scene(job["scene"], source=job.get("source") or "<numba warm-up>")
+    seconds = _time_compilations() if job.get("record") else {}
     sim = None
     try:
         sim = Simulation(scene)
@@ -217,6 +375,8 @@ def _child(path: str) -> int:
     except SimulationStopped:  # the kernels of the steps taken are cached all the same
         pass
     log = sim.stage_log if sim is not None else StageLog()
+    if job.get("record"):
+        write_json(job["record"], {"kernels": _record_entries(seconds)})
     kernels = used_kernels()
     manifest = Path(job["manifest"])
     manifest.parent.mkdir(parents=True, exist_ok=True)
@@ -226,5 +386,69 @@ def _child(path: str) -> int:
     return 0
 
 
+def _time_compilations() -> dict:
+    """``{"module:attribute": seconds}`` of this process's outermost numba compilations
+    from now on (filled as they happen: a listener on numba's ``numba:compile`` event)."""
+    from numba.core import event
+
+    seconds, stack = {}, []
+
+    class Timer(event.Listener):
+        def on_start(self, ev):
+            stack.append(time.perf_counter())
+
+        def on_end(self, ev):
+            dt = time.perf_counter() - stack.pop()
+            d = ev.data.get("dispatcher")
+            f = getattr(d, "py_func", None)
+            if not stack and f is not None:
+                name = f"{f.__module__}:{f.__name__}"
+                seconds[name] = seconds.get(name, 0.0) + dt
+
+    event.register("numba:compile", Timer())
+    return seconds
+
+
+def record(paths: list[str], coarsen: float = 3.0, steps: int = 100,
+           out: Path = SIGNATURES) -> dict:
+    """Record the kernels of the scenes ``paths`` into ``out``: each scene's coarsened copy
+    runs in a child with an empty numba cache (so every kernel compiles and its seconds
+    are measured); returns ``{scene path: number of kernels}``."""
+    from sphfem.output import write_json
+    from sphfem.scene import load_scene
+
+    try:
+        data = json.loads(out.read_text())
+    except (OSError, ValueError):
+        data = {}
+    data.setdefault("about", "numba signatures of scenes' kernels for sphfem.jit_warmup; "
+                             "python -m sphfem.jit_warmup --record SCENE")
+    scenes = data.setdefault("scenes", {})
+    done = {}
+    for p in paths:
+        scene = load_scene(p)
+        with tempfile.TemporaryDirectory(prefix="sphfem-jit-record-") as tmp:
+            job = Path(tmp) / "scene.json"
+            job.write_text(json.dumps({"scene": coarsened(scene, coarsen, steps),
+                                       "source": scene.source,
+                                       "manifest": str(Path(tmp) / "manifest.json"),
+                                       "record": str(Path(tmp) / "record.json"),
+                                       "out": str(Path(tmp) / "out")}))
+            env = {**os.environ, "NUMBA_CACHE_DIR": str(Path(tmp) / "numba"),
+                   "SPHFEM_CACHE": str(Path(tmp) / "cache")}
+            subprocess.run([sys.executable, "-m", "sphfem.jit_warmup", str(job)], env=env,
+                           check=True, capture_output=True)
+            entries = json.loads((Path(tmp) / "record.json").read_text())["kernels"]
+        scenes[record_key(scene)] = {"scene": Path(p).name, "kernels": entries}
+        done[p] = len(entries)
+    write_json(out, data)
+    return done
+
+
 if __name__ == "__main__":
+    if sys.argv[1] == "--compile":
+        sys.exit(_compile_group(sys.argv[2]))
+    if sys.argv[1] == "--record":
+        print(json.dumps(record(sys.argv[2:])))
+        sys.exit(0)
     sys.exit(_child(sys.argv[1]))

@@ -149,3 +149,60 @@ def test_first_run_compiles_in_the_child_only(tmp_path):
     err, s = run("warm")
     assert "child process" not in err
     assert s["setup"]["numba_compilations"] == 0
+
+
+def test_split_balances_recorded_seconds():
+    from sphfem.jit_warmup import split
+
+    entries = [{"kernel": f"m:k{i}", "sigs": ["x"], "s": s}
+               for i, s in enumerate([10.0, 7.0, 6.0, 4.0, 3.0, 1.0])]
+    groups = split(entries, 2)
+    loads = sorted(sum(e["s"] for e in g) for g in groups)
+    assert loads == [15.0, 16.0]  # longest first to the lighter list: 10+4+1 | 7+6+3
+    assert sorted(e["kernel"] for g in groups for e in g) == sorted(e["kernel"] for e in entries)
+    assert split(entries[:1], 2) == [entries[:1]]  # no empty process
+    assert len(split(entries, 1)) == 1
+
+
+_RECORDED = textwrap.dedent("""
+    import base64, json, pickle, sys
+    sys.path.insert(0, sys.argv[1])
+    from numba import types
+    import tinykern
+    from sphfem.jit_warmup import _compile_recorded, _valid_entries, is_warm, recorded
+    from sphfem.scene import parse_scene_toml
+    scene = parse_scene_toml(open(sys.argv[2]).read())
+    sigs = [base64.b64encode(pickle.dumps(s)).decode() for s in [(types.float64,),
+                                                                   (types.int64,)]]
+    entries = [{"kernel": "tinykern:twice", "sigs": sigs, "s": 1.0},
+               {"kernel": "tinykern:thrice", "sigs": sigs[:1], "s": 0.5}]
+    before = is_warm(scene)
+    info = _compile_recorded(scene, entries, progress=False)
+    print(json.dumps({"before": before, "info": info, "after": is_warm(scene),
+                      "valid": [_valid_entries(tinykern.twice),
+                                _valid_entries(tinykern.thrice)],
+                      "called_here": len(tinykern.twice.overloads)}))
+""")
+
+
+@pytest.mark.slow
+def test_recorded_kernels_compile_in_child_processes(tmp_path):
+    """A recorded scene's signatures compile in one child per worker into numba's cache
+    (this process compiles nothing) and the manifest then says warm."""
+    mod = tmp_path / "mod"
+    mod.mkdir()
+    (mod / "tinykern.py").write_text(
+        "from numba import njit\n\n@njit(cache=True)\ndef twice(x):\n    return 2 * x\n\n"
+        "@njit(cache=True)\ndef thrice(x):\n    return 3 * x\n")
+    scene = tmp_path / "tiny.toml"
+    scene.write_text(_SCENE)
+    env = {**os.environ, "NUMBA_CACHE_DIR": str(tmp_path / "numba"),
+           "SPHFEM_CACHE": str(tmp_path / "cache"), "SPHFEM_JIT_WORKERS": "2",
+           "PYTHONPATH": os.pathsep.join([str(mod), os.environ.get("PYTHONPATH", "")])}
+    r = subprocess.run([sys.executable, "-c", _RECORDED, str(mod), str(scene)],
+                       capture_output=True, text=True, env=env, check=True)
+    out = json.loads(r.stdout.strip().splitlines()[-1])
+    assert out["before"] is False and out["after"] is True
+    assert out["info"] == {"workers": 2, "ok": True, "compiled": 3, "failed": 0}
+    assert out["valid"] == [2, 1] and out["called_here"] == 0
+
