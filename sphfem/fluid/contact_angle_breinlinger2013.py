@@ -42,7 +42,7 @@ import numpy as np
 from numba import njit, prange
 
 from sphfem.fluid.passes import grad_factor
-from sphfem.kernels import FASTMATH
+from sphfem.kernels import FASTMATH, kernel_f
 from sphfem.particles import FLUID, WALL
 from sphfem.smallmat import pair_sep
 
@@ -130,3 +130,97 @@ def apply_young_normals(solver, g: np.ndarray, theta_deg: float,
                   solver.sigma, solver.kernel_code, solver.period, math.cos(th), math.sin(th),
                   WALL_LO, WALL_HI, g, beta)
     return beta
+
+
+@njit(cache=True, parallel=True, fastmath=FASTMATH)
+def young_wall_normals(x, V, kind, offsets, indices, R, sigma, kernel_code, period, cos_t,
+                       sin_t, g, omega, g_out, omega_out):
+    """Young's inward normals on the wall rows next to a free surface (the interface
+    continued into the wall at theta): for wall row b, from its fluid neighbours f,
+
+        n_w = normalise(sum_f W_bf n_w,f)   (n_w,f = -grad_f C_wall / |...|, out of the wall)
+        t   = -tangential part of sum_f omega_f W_bf g_f / |g_f|, normalised
+        g_out[b] = -(n_w cos theta + t sin theta),
+        omega_out[b] = sum_f omega_f V_f W_bf / sum_f V_f W_bf;
+
+    fluid rows copy ``g`` and ``omega``; other rows get 0."""
+    n, dim = x.shape
+    R2 = R * R
+    fac2 = sigma / (R * R)
+    periodic = False
+    for k in range(dim):
+        periodic |= period[k] > 0.0
+    for b in prange(n):
+        for k in range(dim):
+            g_out[b, k] = g[b, k] if kind[b] == FLUID else 0.0
+        omega_out[b] = omega[b] if kind[b] == FLUID else 0.0
+        if kind[b] != WALL:
+            continue
+        s = 0.0
+        so = 0.0
+        w0 = 0.0
+        w1 = 0.0
+        w2 = 0.0
+        m0 = 0.0
+        m1 = 0.0
+        m2 = 0.0
+        for jj in range(offsets[b], offsets[b + 1]):
+            f = indices[jj]
+            if kind[f] != FLUID:
+                continue
+            r0, r1, r2 = pair_sep(x, b, f, dim, period, periodic)
+            d2 = r0 * r0 + r1 * r1 + r2 * r2
+            if d2 >= R2:
+                continue
+            w = V[f] * sigma * kernel_f(np.sqrt(d2) / R, kernel_code)
+            s += w
+            # the fluid particle's wall normal: -sum_wall V grad_f W over its wall neighbours
+            c0 = 0.0
+            c1 = 0.0
+            c2 = 0.0
+            for kk in range(offsets[f], offsets[f + 1]):
+                c = indices[kk]
+                if kind[c] != WALL:
+                    continue
+                e0, e1, e2 = pair_sep(x, f, c, dim, period, periodic)
+                q2 = e0 * e0 + e1 * e1 + e2 * e2
+                if q2 >= R2 or q2 == 0.0:
+                    continue
+                t = V[c] * grad_factor(np.sqrt(q2), R, fac2, kernel_code)
+                c0 -= t * e0
+                c1 -= t * e1
+                c2 -= t * e2
+            cn = np.sqrt(c0 * c0 + c1 * c1 + c2 * c2)
+            if cn > 0.0:
+                w0 += w * c0 / cn
+                w1 += w * c1 / cn
+                w2 += w * c2 / cn
+            if omega[f] > 0.0:
+                gf0 = g[f, 0]
+                gf1 = g[f, 1] if dim > 1 else 0.0
+                gf2 = g[f, 2] if dim > 2 else 0.0
+                gn = np.sqrt(gf0 * gf0 + gf1 * gf1 + gf2 * gf2)
+                if gn > 0.0:
+                    so += omega[f] * w
+                    m0 += omega[f] * w * gf0 / gn
+                    m1 += omega[f] * w * gf1 / gn
+                    m2 += omega[f] * w * gf2 / gn
+        wn = np.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
+        if s <= 0.0 or so <= 0.0 or wn <= 0.0:
+            continue
+        nw0 = w0 / wn
+        nw1 = w1 / wn
+        nw2 = w2 / wn
+        mw = m0 * nw0 + m1 * nw1 + m2 * nw2
+        t0 = m0 - mw * nw0
+        t1 = m1 - mw * nw1
+        t2 = m2 - mw * nw2
+        tn = np.sqrt(t0 * t0 + t1 * t1 + t2 * t2)
+        if tn <= 1e-6 * so:
+            continue
+        g_out[b, 0] = -nw0 * cos_t + t0 / tn * sin_t
+        if dim > 1:
+            g_out[b, 1] = -nw1 * cos_t + t1 / tn * sin_t
+        if dim > 2:
+            g_out[b, 2] = -nw2 * cos_t + t2 / tn * sin_t
+        omega_out[b] = so / s
