@@ -523,6 +523,45 @@ class CouplingModule(PhysicsModule):
         return d
 
 
+    # -- checkpoint ---------------------------------------------------------------------
+    #: attributes saved in a checkpoint, per object (the rest is rebuilt by ``init``)
+    _STATE = {"module": ("steps", "contact", "clearance0", "ledger"),
+              "driver": ("history", "peak", "max_force_residual", "max_moment_residual",
+                         "n_written", "every_k"),
+              "thermal": ("t_last", "q_ideal", "history", "T_impact_max", "T_impact_max_t",
+                          "uncovered_max", "fluid_e0"),
+              "heat": ("T", "t", "steps", "factorisations", "H0", "_h0_key", "heat_in",
+                       "heat_dirichlet"),
+              "interface": ("t", "t_wet", "s2", "strain", "heat_to_substrate",
+                            "heat_from_fluid", "steps")}
+
+    def _stateful(self) -> dict:
+        th = self.driver.thermal
+        objs = {"module": self, "driver": self.driver}
+        if th is not None:
+            objs.update(thermal=th, heat=th.heat, interface=th.itf)
+        return objs
+
+    def checkpoint_state(self, ctx) -> dict:
+        """The records, running peaks, contact time and, with ``[coupling.heat] model =
+        "fem-contact"``, the substrate's temperature field and the contact interface's
+        layer state (module docstring of :mod:`coupling.heat_interface`)."""
+        import copy
+
+        return {key: {a: copy.deepcopy(getattr(obj, a)) for a in self._STATE[key]}
+                for key, obj in self._stateful().items()}
+
+    def restore_state(self, ctx, state: dict) -> None:
+        objs = self._stateful()
+        if set(state) != set(objs):
+            raise ValueError(f"coupling: the checkpoint holds the states of {sorted(state)}, "
+                             f"this scene needs {sorted(objs)}: rerun from t = 0")
+        for key, obj in objs.items():
+            for a, v in state[key].items():
+                setattr(obj, a, v)
+        if self.driver.thermal is not None:
+            self.driver.thermal.heat._lu = {}  # factorised again for the restored H0
+
     @staticmethod
     def _resumed_in_contact(t: float) -> dict:
         """A run resumed from a checkpoint already past contact: its time is not known here."""

@@ -188,9 +188,10 @@ def build_substrate_heat(scene, cfg, ctx, region):
     from sphfem.fem.heat_transient import TransientHeat, graded_mesh
     from sphfem.particles import FLUID
 
-    if ctx.t > 0.0:
-        raise ValueError('[coupling.heat] model = "fem-contact" cannot resume from a '
-                         "checkpoint: the FEM heat state is not checkpointed; rerun from t = 0")
+    if ctx.t > 0.0 and "coupling" not in (ctx.resumed_states or {}):
+        raise ValueError('[coupling.heat] model = "fem-contact" cannot resume from this '
+                         "checkpoint: it holds no substrate heat state (written by an "
+                         "older sphfem); rerun from t = 0")
     t0 = time.perf_counter()
     dim = scene.dim
     sol = ctx.materials[cfg.material]

@@ -66,6 +66,9 @@ class StepContext:
     #: the driver's list service: ``provide(rebuild)`` makes ``nbrs`` valid for the
     #: current positions (rebuild=True: build anew now)
     provide: Callable[[bool], None] | None = field(default=None, repr=False)
+    #: on a resumed run, the modules' saved states by module name
+    #: (:meth:`sphfem.physics.PhysicsModule.checkpoint_state`), set before their ``init``
+    resumed_states: dict | None = field(default=None, repr=False)
 
     @property
     def dim(self) -> int:

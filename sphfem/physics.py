@@ -56,6 +56,10 @@ class PhysicsModule:
     #: True if the module moves particles (the driver then keeps a Verlet-skin list and
     #: checks it before each step; inside its step the module asks ``ctx.neighbors()``)
     moves_particles = False
+    #: attributes saved in a checkpoint by the default :meth:`checkpoint_state`: the
+    #: module's running records (histories, accumulated impulses, peaks) that ``init``
+    #: cannot rebuild from the particles
+    checkpoint_attrs: tuple[str, ...] = ()
 
     def __init__(self, scene):
         self.scene = scene
@@ -93,6 +97,23 @@ class PhysicsModule:
     def diagnostics(self, ctx) -> dict:
         """JSON-serialisable figures for summary.json (fallback counts, energy drift, ...)."""
         return {}
+
+    def checkpoint_state(self, ctx) -> dict | None:
+        """The module's own state that is not in the particle fields (histories, running
+        peaks, a substrate's temperature field), as picklable plain data, or None when it
+        has none.  The driver stores it in the checkpoint and hands it to
+        :meth:`restore_state` after ``init`` on a resumed run.  Default: copies of the
+        attributes named in :attr:`checkpoint_attrs`."""
+        import copy
+
+        if not self.checkpoint_attrs:
+            return None
+        return {a: copy.deepcopy(getattr(self, a)) for a in self.checkpoint_attrs}
+
+    def restore_state(self, ctx, state: dict) -> None:
+        """Take back what :meth:`checkpoint_state` returned (after ``init``)."""
+        for a, v in state.items():
+            setattr(self, a, v)
 
 
 def build_modules(scene) -> list[PhysicsModule]:

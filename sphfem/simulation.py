@@ -445,11 +445,28 @@ class Simulation:
                  acc_total_s=e["total_s"] + self.setup_s + (now - self._run0),
                  acc_processes=e["processes"] + 1,
                  series_t=np.array([e[0] for e in series.entries]),
-                 series_f=np.array([e[1] for e in series.entries]), **arrays)
+                 series_f=np.array([e[1] for e in series.entries]), **arrays,
+                 **self._module_states())
         atomic_write_bytes(path, buf.getvalue())
 
+    def _module_states(self) -> dict:
+        """``m_<name>``: each module's :meth:`PhysicsModule.checkpoint_state`, pickled into a
+        byte array (the checkpoint stays a plain npz, loaded without allow_pickle)."""
+        import pickle
+
+        out = {}
+        for mod in self.modules:
+            st = mod.checkpoint_state(self.ctx)
+            if st is not None:
+                out[f"m_{mod.name}"] = np.frombuffer(pickle.dumps(st, protocol=5), np.uint8)
+        return out
+
     def load_checkpoint(self, path: Path) -> None:
+        import pickle
+
         with np.load(path) as z:
+            states = {k[2:]: pickle.loads(z[k].tobytes()) for k in z.files
+                      if k.startswith("m_")}
             self.t = float(z["t"])
             self.step_count = int(z["step"])
             for k in z.files:
@@ -465,7 +482,11 @@ class Simulation:
         if np.any(ps.kind == GHOST):  # derived particles: the modules place them anew
             self.ctx.particles = ps.select(ps.kind != GHOST)
         self.update_neighbors()
+        self.ctx.resumed_states = states  # modules that cannot restart without theirs look
         self._init_modules()
+        for mod in self.modules:
+            if mod.name in states:
+                mod.restore_state(self.ctx, states[mod.name])
 
 
 def format_summary(summary: dict, out) -> str:
