@@ -24,12 +24,148 @@ its velocity is removed, v_i -= min(v_i . n_j, 0) n_j (an inelastic contact with
 wall: the wall takes the normal momentum, as a wall does).  Masses are untouched, so mass
 is conserved exactly; tangential velocity is untouched.  Wall particles without a normal
 (a zero row) take no part.
+
+The candidates j are the ``k`` wall particles nearest to x_i within the search reach (as a
+k-d tree query returns them, nearest first; ties in phi go to the nearer tile).  The walls
+are at rest, so :class:`NoPenetration` bins them once on a uniform grid of cell size =
+reach and :func:`signed_distance` (numba, parallel over the points) scans the 3^d cells
+around each point; :meth:`NoPenetration.distance_reference` is the k-d tree / numpy form it
+replaces (the same figures to the bit, tests/test_no_penetration.py).
 """
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
+from numba import njit, prange
 from scipy.spatial import cKDTree
+
+
+@njit(cache=True)
+def _bin_walls(xw, origin, width, ncell):
+    """Counting sort of the wall particles into the cells of a uniform grid: ``start``
+    (cells + 1,) and ``items`` (wall indices, ascending within a cell)."""
+    m, d = xw.shape
+    ncells = 1
+    for a in range(d):
+        ncells *= ncell[a]
+    cid = np.empty(m, np.int64)
+    for j in range(m):
+        c = 0
+        for a in range(d):
+            c = c * ncell[a] + int(math.floor((xw[j, a] - origin[a]) / width))
+        cid[j] = c
+    start = np.zeros(ncells + 1, np.int64)
+    for j in range(m):
+        start[cid[j] + 1] += 1
+    for c in range(ncells):
+        start[c + 1] += start[c]
+    fill = start[:-1].copy()
+    items = np.empty(m, np.int64)
+    for j in range(m):
+        items[fill[cid[j]]] = j
+        fill[cid[j]] += 1
+    return start, items
+
+
+@njit(cache=True, parallel=True)
+def signed_distance(x, xw, nw, half, reach, k, origin, width, ncell, start, items, stencil,
+                    cd2, cj, phi, nrm):
+    """phi_i and n_i of the module docstring for the points ``x`` (n, d): over the ``k``
+    wall particles nearest to x_i with |x_i - x_j| < ``reach`` (nearest first; equal
+    distances by index), the tile with the smallest (x_i - x_j) . n_j - s_j / 2 among those
+    with |t_ij| <= s_j / 2 (1 + 1e-9), the nearer one on a tie.  Walls binned by
+    :func:`_bin_walls` (cell size ``width`` >= ``reach``; ``stencil`` the 3^d cell
+    offsets); ``cd2``, ``cj`` (n, k) work arrays.  phi = inf and n = 0 where no tile
+    covers the point (and at non-finite points)."""
+    n, d = x.shape
+    r2 = reach * reach
+    for i in prange(n):
+        phi[i] = np.inf
+        for a in range(d):
+            nrm[i, a] = 0.0
+        fin = True
+        for a in range(d):
+            if not math.isfinite(x[i, a]):
+                fin = False
+        if not fin:
+            continue
+        cnt = 0
+        for s in range(stencil.shape[0]):
+            c = 0
+            inside = True
+            for a in range(d):
+                ca = int(math.floor((x[i, a] - origin[a]) / width)) + stencil[s, a]
+                if ca < 0 or ca >= ncell[a]:
+                    inside = False
+                    break
+                c = c * ncell[a] + ca
+            if not inside:
+                continue
+            for q in range(start[c], start[c + 1]):
+                j = items[q]
+                d2 = 0.0
+                for a in range(d):
+                    e = x[i, a] - xw[j, a]
+                    d2 += e * e
+                if not d2 < r2:
+                    continue
+                # insert (d2, j) into the sorted list of the k nearest
+                if cnt == k and (d2 > cd2[i, k - 1] or (d2 == cd2[i, k - 1]
+                                                        and j > cj[i, k - 1])):
+                    continue
+                p = cnt if cnt < k else k - 1
+                while p > 0 and (cd2[i, p - 1] > d2 or (cd2[i, p - 1] == d2
+                                                        and cj[i, p - 1] > j)):
+                    cd2[i, p] = cd2[i, p - 1]
+                    cj[i, p] = cj[i, p - 1]
+                    p -= 1
+                cd2[i, p] = d2
+                cj[i, p] = j
+                if cnt < k:
+                    cnt += 1
+        best = np.inf
+        bj = -1
+        for q in range(cnt):
+            j = cj[i, q]
+            dn = 0.0
+            for a in range(d):
+                dn += (x[i, a] - xw[j, a]) * nw[j, a]
+            t2 = 0.0
+            for a in range(d):
+                e = (x[i, a] - xw[j, a]) - dn * nw[j, a]
+                t2 += e * e
+            h = half[j]
+            if math.sqrt(t2) <= h * (1 + 1e-9):
+                ph = dn - h
+                if ph < best:
+                    best = ph
+                    bj = j
+        if bj >= 0:
+            phi[i] = best
+            for a in range(d):
+                nrm[i, a] = nw[bj, a]
+
+
+@njit(cache=True)
+def _project(x, v, phi, nrm):
+    """x_i -= phi_i n_i and v_i -= min(v_i . n_i, 0) n_i where phi_i < 0 (in place);
+    returns how many points were moved."""
+    n, d = x.shape
+    moved = 0
+    for i in range(n):
+        if not phi[i] < 0.0:
+            continue
+        moved += 1
+        vn = 0.0
+        for a in range(d):
+            x[i, a] -= phi[i] * nrm[i, a]
+            vn += v[i, a] * nrm[i, a]
+        vn = min(vn, 0.0)
+        for a in range(d):
+            v[i, a] -= vn * nrm[i, a]
+    return moved
 
 
 class NoPenetration:
@@ -44,17 +180,52 @@ class NoPenetration:
         xw = np.asarray(xw, float)
         nw = np.asarray(nw, float).reshape(xw.shape)
         keep = np.linalg.norm(nw, axis=1) > 0
-        self.xw = xw[keep]
-        self.nw = nw[keep] / np.linalg.norm(nw[keep], axis=1)[:, None]
+        self.xw = np.ascontiguousarray(xw[keep])
+        self.nw = np.ascontiguousarray(nw[keep] / np.linalg.norm(nw[keep], axis=1)[:, None])
         d = xw.shape[1]
-        self.half = 0.5 * np.broadcast_to(np.asarray(vol, float), (xw.shape[0],))[keep] ** (1.0 / d)
+        self.half = np.ascontiguousarray(
+            0.5 * np.broadcast_to(np.asarray(vol, float), (xw.shape[0],))[keep] ** (1.0 / d))
         self.k = min(int(k), max(int(keep.sum()), 1))
         self.reach = 4.0 * float(self.half.max()) * 2.0 if keep.any() else 0.0
-        self.tree = cKDTree(self.xw) if keep.any() else None
+        self._tree = None
+        self._grid = None
+        if keep.any():
+            # cells of size reach (a point's candidates lie in the 3^d cells around it)
+            origin = self.xw.min(axis=0) - self.reach
+            ncell = (np.floor((self.xw.max(axis=0) + self.reach - origin) / self.reach)
+                     .astype(np.int64) + 1)
+            start, items = _bin_walls(self.xw, origin, self.reach, ncell)
+            stencil = np.array(np.meshgrid(*([[-1, 0, 1]] * d), indexing="ij"),
+                               np.int64).reshape(d, -1).T.copy()
+            self._grid = (origin, ncell, start, items, stencil)
+
+    @property
+    def tree(self):
+        """k-d tree of the walls (built on first use: :meth:`distance_reference` only)."""
+        if self._tree is None and self.xw.shape[0]:
+            self._tree = cKDTree(self.xw)
+        return self._tree
 
     def distance(self, x):
         """Signed distance phi (n,) of the points ``x`` to the wall surface (+inf where no
-        tile covers the point within the search reach) and the normal (n, d) of the tile."""
+        tile covers the point within the search reach) and the normal (n, d) of the tile
+        (zero where phi = inf)."""
+        x = np.ascontiguousarray(x, dtype=np.float64)
+        n, d = x.shape
+        phi = np.full(n, np.inf)
+        nrm = np.zeros((n, d))
+        if self._grid is None or n == 0:
+            return phi, nrm
+        origin, ncell, start, items, stencil = self._grid
+        cd2 = np.empty((n, self.k))
+        cj = np.empty((n, self.k), np.int64)
+        signed_distance(x, self.xw, self.nw, self.half, self.reach, self.k, origin,
+                        self.reach, ncell, start, items, stencil, cd2, cj, phi, nrm)
+        return phi, nrm
+
+    def distance_reference(self, x):
+        """:meth:`distance` by a k-d tree query and numpy (the original form, kept as the
+        reference of the tests; its normal where phi = inf is that of the nearest wall)."""
         n, d = x.shape
         phi = np.full(n, np.inf)
         nrm = np.zeros((n, d))
@@ -80,10 +251,4 @@ class NoPenetration:
         """Project the points with phi < 0 onto the wall surface and remove the inward normal
         velocity (in place); returns how many were corrected."""
         phi, nrm = self.distance(x)
-        bad = np.flatnonzero(phi < 0.0)
-        if bad.size == 0:
-            return 0
-        x[bad] -= phi[bad, None] * nrm[bad]
-        vn = (v[bad] * nrm[bad]).sum(axis=1)
-        v[bad] -= np.minimum(vn, 0.0)[:, None] * nrm[bad]
-        return int(bad.size)
+        return int(_project(x, v, phi, nrm))
