@@ -49,7 +49,10 @@ Heat (:class:`AxisymmetricHeatModule`): eq. (1) of :mod:`sphfem.heat.axisymmetri
 Cleary's harmonic k_ij, over fluid and wall rings and the even axis ghosts, with
 A_i = m_i / (2 pi r_i rho_i); pairwise symmetric, so sum_i m_i c_i T_i is conserved to
 round-off (``energy_residual_J``).  Explicit Heun at ``[heat] cfl`` times the Gershgorin
-limit; the list is rebuilt every step (the fluid moves).
+limit; the list holds the rings with k > 0 only (a ring with k = 0, such as the wall of
+``[coupling.heat] model = "fem-contact"``, has k_ij = 0 with every neighbour) and is kept
+with a Verlet skin as the fluid's (``AxisymmetricFluidModule.SKIN``; the same rates to the
+bit).
 """
 
 from __future__ import annotations
@@ -147,6 +150,12 @@ def wall_ring_forces(x, v, vg, rho, p, mt, mu, kind, offsets, indices, Rp, s2, k
         out[w, 1] = f1
 
 
+def _max_move(x, x0) -> float:
+    """max_i |x_i - x0_i|."""
+    d = x - x0
+    return math.sqrt(float(np.max(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1], initial=0.0)))
+
+
 def box_wall_normals(scene, x, kind) -> np.ndarray | None:
     """Outward unit normals (n, 2) of the wall particles: the normal of the nearest
     *exposed* face of the wall box block holding the particle, a face being exposed when
@@ -213,6 +222,11 @@ class AxisymmetricFluidModule(PhysicsModule):
     #: ``[fluid] shifting`` the impact at 50 m/s, D/dx = 32 runs calm to 4 tc
     fluid_options = {"adaptive_h": False, "wall_tension": False,
                      "free_surface_no_tension": True}
+    #: Verlet skin of the fluid's (and the heat's) neighbour list, as a fraction of R: the
+    #: list reaches R (1 + SKIN) and is rebuilt only when a ring has moved R SKIN / 2.
+    #: Every pair kernel skips pairs beyond its support and list rows are sorted by index,
+    #: so the figures are those of a list rebuilt at every step, to the bit
+    SKIN = 0.15
 
     def __init__(self, scene):
         from sphfem.fluid.wcsph import params_from_scene
@@ -263,7 +277,8 @@ class AxisymmetricFluidModule(PhysicsModule):
             wall_normals=nrm, smooth_hoop=True, no_penetration=self.no_penetration,
             surface_tension=self.sigma_st,
             shifting=(self.params.shifting_coef if self.params.shifting != "none" else 0.0),
-            shift_surface=self.params.shifting == "all", **self.fluid_options)
+            shift_surface=self.params.shifting == "all", skin=self.SKIN,
+            **self.fluid_options)
         self.nrm = nrm
         wl = np.flatnonzero(kind == WALL)
         self._walls = wl
@@ -428,7 +443,8 @@ class AxisymmetricFluidModule(PhysicsModule):
              "max_ring_depth_below_wall_top_dx": self.max_depth,
              "t_wall_breach_s": self.t_breach,
              "axial_momentum_residual_rel": self.momentum_residual(ps),
-             "wall_s": dict(s.wall_s), "steps": s.step_count}
+             "wall_s": dict(s.wall_s), "steps": s.step_count,
+             "neighbor_lists": {"built": s.list_builds, "reused": s.list_reuses}}
         if self.D0 > 0 and len(sp):
             k = int(np.argmax(sp[:, 1]))
             d["spreading"] = {
@@ -466,6 +482,11 @@ class AxisymmetricHeatModule(PhysicsModule):
         self.steps = 0
         self.wall_s = 0.0
         self._limit = math.inf
+        #: Verlet skin of the heat list (as the fluid's, AxisymmetricFluidModule.SKIN)
+        self.skin = AxisymmetricFluidModule.SKIN
+        self._list = None
+        self.list_builds = 0
+        self.list_reuses = 0
 
     def fields(self):
         f = np.float64
@@ -493,23 +514,42 @@ class AxisymmetricHeatModule(PhysicsModule):
         from sphfem.heat.axisymmetric import axis_ghosts
 
         ps = ctx.particles
-        real = np.flatnonzero(ps.kind != GHOST)
+        # rings with k = 0 (the substrate of model = "fem-contact") take part in no pair:
+        # every pair term with them is exactly 0 and their own rate is 0, so they are left
+        # out of the list (neighbour rows are sorted by index, so the remaining sums run in
+        # the same order: the same rates to the bit)
+        real = np.flatnonzero((ps.kind != GHOST) & (ps.k_heat != 0.0))
         x = np.ascontiguousarray(ps.x[real])
-        g = axis_ghosts(x, ctx.R)
         n = x.shape[0]
-        xa = np.ascontiguousarray(np.vstack([x, g.x]))
+        c = self._list
+        if (c is not None and np.array_equal(c[1], real)
+                and ctx.R + 2.0 * _max_move(x, c[4]) <= c[0]):
+            src, nl = c[2], c[3]  # the list (and axis ghosts) of the last build still hold
+            xg = x[src].copy()
+            xg[:, 0] *= -1.0
+            xa = np.ascontiguousarray(np.vstack([x, xg]))
+            self.list_reuses += 1
+        else:  # ghosts and list out to R (1 + skin)
+            radius = ctx.R * (1.0 + self.skin)
+            g = axis_ghosts(x, radius)
+            src = g.src
+            xa = np.ascontiguousarray(np.vstack([x, g.x]))
+            kind = np.concatenate([np.full(n, FLUID, np.int8), np.full(g.n, GHOST, np.int8)])
+            keep = [0] * (GHOST + 1)
+            keep[FLUID] = (1 << FLUID) | (1 << GHOST)
+            lo = xa.min(axis=0) - radius if n else np.zeros(2)
+            hi = xa.max(axis=0) + radius if n else np.ones(2)
+            nl = build_neighbor_list(xa, radius, lo, hi, np.zeros(2), kind=kind,
+                                     keep=tuple(keep))
+            self._list = (radius, real, src, nl, x.copy())
+            self.list_builds += 1
         A = ring_areas(ps)[real]
-        kind = np.concatenate([np.full(n, FLUID, np.int8), np.full(g.n, GHOST, np.int8)])
-        keep = [0] * (GHOST + 1)
-        keep[FLUID] = (1 << FLUID) | (1 << GHOST)
-        lo = xa.min(axis=0) - ctx.R
-        hi = xa.max(axis=0) + ctx.R
-        nl = build_neighbor_list(xa, ctx.R, lo, hi, np.zeros(2), kind=kind, keep=tuple(keep))
         k = ps.k_heat[real]
         inv = 1.0 / (x[:, 0] * ps.rho[real] * ps.c_heat[real])
-        return dict(real=real, xa=xa, src=g.src, n=n, nl=nl,
-                    A=np.concatenate([A, A[g.src]]), k=np.concatenate([k, k[g.src]]),
-                    rc=np.concatenate([x[:, 0], g.r_cond]), inv=inv, mom=np.ones(n + g.n))
+        return dict(real=real, xa=xa, src=src, n=n, nl=nl,
+                    A=np.concatenate([A, A[src]]), k=np.concatenate([k, k[src]]),
+                    rc=np.concatenate([x[:, 0], x[src, 0]]), inv=inv,
+                    mom=np.ones(n + src.shape[0]))
 
     def _rates(self, ctx, T_all, sysd=None):
         from sphfem.heat.axisymmetric import heat_rates
@@ -545,4 +585,5 @@ class AxisymmetricHeatModule(PhysicsModule):
                 "energy_J": self.energy(ctx.particles), "energy_initial_J": self.e0,
                 "energy_residual_J": self.residual,
                 "energy_residual_rel": self.residual / max(abs(self.e0), 1e-300),
-                "explicit_limit_s": self._limit, "wall_s": self.wall_s}
+                "explicit_limit_s": self._limit, "wall_s": self.wall_s,
+                "neighbor_lists": {"built": self.list_builds, "reused": self.list_reuses}}

@@ -84,3 +84,51 @@ def test_energy_conserved_insulated(normalise, outer):
         h.step(dt)
     assert abs(h.energy() - e0) < 1e-12 * abs(e0)
     assert np.std(h.T) < 0.9 * np.std(T0)
+
+
+def test_rates_without_insulating_rings_bitwise():
+    """Rings with k = 0 (the fem-contact substrate) carry no pair term, so the rates of the
+    conducting rings computed without them (as AxisymmetricHeatModule builds its list) are
+    those of the whole set to the bit; the k = 0 rings' own rates are exactly 0."""
+    from sphfem import kernels
+    from sphfem.heat.axisymmetric import axis_ghosts, heat_rates
+    from sphfem.neighbors import build_neighbor_list
+    from sphfem.particles import FLUID, GHOST
+
+    rng = np.random.default_rng(5)
+    dx = 0.1
+    g = (np.arange(16) + 0.5) * dx
+    x = np.array(np.meshgrid(g, g - 0.8)).reshape(2, -1).T
+    x += rng.uniform(-0.2, 0.2, x.shape) * dx
+    x[:, 0] = np.abs(x[:, 0])
+    k = np.where(x[:, 1] < 0.0, 0.0, rng.uniform(0.5, 2.0, len(x)))  # substrate: k = 0
+    T = rng.uniform(280.0, 380.0, len(x))
+    A = np.full(len(x), dx * dx)
+    inv = 1.0 / (x[:, 0] * 1000.0 * 4000.0)
+    R = 3.0 * dx
+    kc = kernels.kernel_code("wendland_c2")
+    sig = kernels.kernel_sigma(kc, 2, R)
+    keep = [0] * (GHOST + 1)
+    keep[FLUID] = (1 << FLUID) | (1 << GHOST)
+
+    def rates(sel):
+        xs = x[sel]
+        gh = axis_ghosts(xs, R)
+        n = len(xs)
+        xa = np.ascontiguousarray(np.vstack([xs, gh.x]))
+        kind = np.concatenate([np.full(n, FLUID, np.int8), np.full(gh.n, GHOST, np.int8)])
+        nl = build_neighbor_list(xa, R, xa.min(axis=0) - R, xa.max(axis=0) + R, np.zeros(2),
+                                 kind=kind, keep=tuple(keep))
+        ks, Ts, As = k[sel], T[sel], A[sel]
+        out = np.zeros(n)
+        gmax = heat_rates(xa, np.concatenate([Ts, Ts[gh.src]]),
+                          np.concatenate([As, As[gh.src]]), np.concatenate([ks, ks[gh.src]]),
+                          np.concatenate([xs[:, 0], gh.r_cond]), inv[sel], np.ones(n + gh.n),
+                          n, nl.offsets, nl.indices, R, sig, kc, np.zeros(2), out)
+        return out, gmax
+
+    full, gfull = rates(np.arange(len(x)))
+    act = np.flatnonzero(k != 0.0)
+    part, gpart = rates(act)
+    assert np.array_equal(full[act], part) and gfull == gpart
+    assert np.all(full[k == 0.0] == 0.0) and np.abs(part).max() > 0.0

@@ -448,6 +448,13 @@ class AxisymmetricFluid:
 
     ``surface_tension``: sigma [N/m] of the CSF force with the hoop curvature
     (:mod:`sphfem.fluid.axisymmetric_surface_tension`); 0: off.
+
+    ``skin`` (> 0): a Verlet list (Verlet 1967): the neighbour list and the axis mirrors
+    reach R (1 + skin) and are reused until R + 2 max_i |x_i - x_i,build| exceeds that
+    radius.  Every pair kernel skips pairs beyond its support and list rows are sorted by
+    index (the mirrors of the longer reach are a superset in the same order), so the steps
+    are those of a list rebuilt at every evaluation to the bit (test); 0 rebuilds it every
+    time.
     """
 
     def __init__(self, x, v, rho, kind, M, vol, R, params: FluidParams,
@@ -457,7 +464,7 @@ class AxisymmetricFluid:
                  no_penetration: bool = False, renorm_lambda_min: float = 0.2,
                  fragment_incompressible: bool = False, shifting: float = 0.0,
                  wall_tension: bool = True, free_surface_no_tension: bool = False,
-                 shift_surface: bool = True):
+                 shift_surface: bool = True, skin: float = 0.0):
         self.x = np.array(x, dtype=np.float64)
         n = self.n = self.x.shape[0]
         self.v = np.array(v, dtype=np.float64).reshape(n, 2)
@@ -533,6 +540,15 @@ class AxisymmetricFluid:
         #: reference meridian area a_ref: R_i = R sqrt(A_i / a_ref) (adaptive_h)
         self.a_ref = float(np.median(self._areas()[self.fluid])) if self.fluid.any() else 1.0
         self.Rp = np.full(n, self.R)
+        #: Verlet skin: the list (and the axis mirrors) reach R (1 + skin) and are reused
+        #: while no particle moved more than R skin / 2 since the build (0: a new list at
+        #: every evaluation)
+        self.skin = float(skin)
+        if not self.skin >= 0.0:
+            raise ValueError(f"skin must be >= 0, got {skin!r}")
+        self._list = None
+        self.list_builds = 0
+        self.list_reuses = 0
         self.evaluate()
 
     def _areas(self) -> np.ndarray:
@@ -552,11 +568,13 @@ class AxisymmetricFluid:
         return np.clip(self.R * np.sqrt(A / self.a_ref), 0.5 * self.R, 2.0 * self.R)
 
     # -- one force evaluation ------------------------------------------------------------
-    def _mirrors(self):
+    def _mirrors(self, R: float | None = None):
         """Sources, types and kinds of the mirrors: images of the fluid across the wall plane
         (if any), then images across the axis of every particle and wall-plane image with
-        r < R (the corner images are axis images of wall-plane images)."""
-        n, R = self.n, float(self.Rp.max())
+        r < R (the corner images are axis images of wall-plane images); R: the largest
+        support radius unless given."""
+        n = self.n
+        R = float(self.Rp.max()) if R is None else float(R)
         srcs, types = [], []
         if self.wall_z is not None:
             s1 = np.flatnonzero(self.fluid & (self.x[:, 1] - self.wall_z < R))
@@ -570,13 +588,13 @@ class AxisymmetricFluid:
         types.append(np.zeros(s0.shape[0], np.int8))
         src = np.concatenate(srcs).astype(np.int64)
         mtype = np.concatenate(types)
-        base = np.concatenate([self.kind, np.full(src.shape[0], FLUID, np.int8)])
-        kind = self.kind.copy()
-        mk = np.empty(src.shape[0], np.int8)
-        for q in range(src.shape[0]):  # the kind of a mirror is its source's
-            kq = base[src[q]] if src[q] < n else mk[src[q] - n]
-            mk[q] = MIRROR_FLUID if kq in (FLUID, MIRROR_FLUID) else MIRROR_WALL
-        return src, mtype, np.concatenate([kind, mk])
+        # the kind of a mirror is its source's (sources beyond n are wall-plane images of
+        # the fluid)
+        wall_src = np.zeros(src.shape[0], bool)
+        real = src < n
+        wall_src[real] = self.kind[src[real]] == WALL
+        mk = np.where(wall_src, MIRROR_WALL, MIRROR_FLUID).astype(np.int8)
+        return src, mtype, np.concatenate([self.kind, mk])
 
     def evaluate(self) -> None:
         """Pressures, wall states, mirrors, gradients, accelerations and density rates."""
@@ -585,7 +603,12 @@ class AxisymmetricFluid:
         A0 = self._areas()
         self.Rp = self.support_radii(A0)
         R = float(self.Rp.max())
-        src, mtype, kind = self._mirrors()
+        reuse = self._list_valid(R)
+        if reuse:
+            src, mtype, kind, nl = self._list[1:5]
+            self.list_reuses += 1
+        else:  # mirrors and list out to the list radius R (1 + skin)
+            src, mtype, kind = self._mirrors(R * (1.0 + self.skin))
         m = n + src.shape[0]
         x = np.empty((m, 2))
         x[:n] = self.x
@@ -593,12 +616,16 @@ class AxisymmetricFluid:
         _fill_mirrors(n, src, mtype, zw, self.gravity[1], x, x.copy(), x.copy(),
                       np.zeros(m), np.zeros(m), np.zeros(m), np.zeros(m), np.zeros(m),
                       np.zeros((m, 2)), np.zeros((m, 2)), np.zeros(m))
-        lo = x.min(axis=0) - R
-        hi = x.max(axis=0) + R
-        period = np.zeros(2)
-        if self.Lz:
-            lo[1], hi[1], period[1] = self.z0, self.z0 + self.Lz, self.Lz
-        nl = build_neighbor_list(x, R, lo, hi, period, kind=kind, keep=KEEP)
+        if not reuse:
+            radius = R * (1.0 + self.skin)
+            lo = x.min(axis=0) - radius
+            hi = x.max(axis=0) + radius
+            period = np.zeros(2)
+            if self.Lz:
+                lo[1], hi[1], period[1] = self.z0, self.z0 + self.Lz, self.Lz
+            nl = build_neighbor_list(x, radius, lo, hi, period, kind=kind, keep=KEEP)
+            self._list = (radius, src, mtype, kind, nl, self.x.copy())
+            self.list_builds += 1
         t1 = time.perf_counter()
         self.wall_s["neighbors"] += t1 - t0
         v = np.zeros((m, 2))
@@ -644,7 +671,7 @@ class AxisymmetricFluid:
             Bm[:, :3] = (1.0, 0.0, 1.0)
         _fill_mirrors(n, src, mtype, zw, self.gravity[1], x, v, vg, rho, p, A, mt, mu, gr, dvdr,
                       Rp)
-        vd = self._divergence_velocity(v, vg, kind, m)
+        vd = self._divergence_velocity(v, vg, src, mtype)
         acc = np.zeros((m, 2))
         drho = np.zeros(m)
         forces(x, v, vg, vd, rho, p, A, mt, mu, kind, gr, dvdr, nl.offsets, nl.indices, Rp,
@@ -669,7 +696,19 @@ class AxisymmetricFluid:
         self.lam = Bm[:n, 4].copy()
         self.wall_s["forces"] += time.perf_counter() - t1
 
-    def _divergence_velocity(self, v, vg, kind, m):
+    def _list_valid(self, R: float) -> bool:
+        """True when the list of the last build still holds every pair and mirror within R:
+        no particle moved more than half the margin, R + 2 max |x - x_build| <= the list
+        radius (pairs then moved apart or together by at most the margin; Verlet 1967)."""
+        if self._list is None or self.skin <= 0.0:
+            return False
+        d = self.x - self._list[5]
+        if self.Lz:
+            d[:, 1] -= self.Lz * np.round(d[:, 1] / self.Lz)
+        move = math.sqrt(float(np.max(d[:, 0] * d[:, 0] + d[:, 1] * d[:, 1])))
+        return R + 2.0 * move <= self._list[0]
+
+    def _divergence_velocity(self, v, vg, src, mtype):
         """The velocity the continuity's divergence sees: the fluid's (and its mirrors'); at
         wall particles with normals the free-slip ghost ṽ - 2 ((ṽ - v_w) . n) n of the
         Adami-extrapolated fluid velocity ṽ = 2 v_w - vg (the normal velocity then passes
@@ -685,12 +724,10 @@ class AxisymmetricFluid:
         un = ((vt - v[w]) * nrm).sum(axis=1)
         vd[w] = vt - 2.0 * un[:, None] * nrm
         # the axis mirrors of walls: copy with v_r negated
-        src, mtype, _ = self._mirrors()
-        for q in range(src.shape[0]):
-            s_ = src[q]
-            if s_ < n and self.kind[s_] == WALL and mtype[q] == 0:
-                vd[n + q, 0] = -vd[s_, 0]
-                vd[n + q, 1] = vd[s_, 1]
+        q = np.flatnonzero((src < n) & (mtype == 0))
+        q = q[self.kind[src[q]] == WALL]
+        vd[n + q, 0] = -vd[src[q], 0]
+        vd[n + q, 1] = vd[src[q], 1]
         return vd
 
     # -- time stepping -------------------------------------------------------------------
