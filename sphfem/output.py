@@ -113,7 +113,17 @@ class VTUSeries:
 
     :meth:`write_mesh` writes a meshio mesh to a temporary name, renames it, and rewrites
     the ``.pvd`` atomically; subclasses build the mesh of what they store.
+
+    ``compression``: the VTU block compressor (meshio: ``None``, ``"zlib"`` or ``"lzma"``).
+    Off by default: zlib (level 6) took 8x the time of the raw base64 write of the same
+    float64 data (0.38 against 0.045 CPU s for a 20k-node stress mesh) and was the largest
+    output cost of the axisymmetric droplet job, which writes its substrate mesh every 4
+    coupling steps, while float fields compress by 1.2-2x only.  Set it on a series (or on
+    the class) to write smaller files.
     """
+
+    #: meshio's VTU compressor: None (raw binary, fast), "zlib" or "lzma" (smaller, slower)
+    compression: str | None = None
 
     def __init__(self, folder, name: str):
         self.folder = Path(folder)
@@ -127,7 +137,7 @@ class VTUSeries:
         fname = f"{self.name}_{len(self.entries):05d}.vtu"
         tmp = self.folder / f".{fname}.tmp.vtu"
         try:
-            meshio.write(tmp, mesh, file_format="vtu")
+            meshio.write(tmp, mesh, file_format="vtu", compression=self.compression)
             os.replace(tmp, self.folder / fname)
         finally:
             if tmp.exists():
