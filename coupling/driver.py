@@ -533,7 +533,7 @@ class CouplingModule(PhysicsModule):
               "heat": ("T", "t", "steps", "factorisations", "H0", "_h0_key", "heat_in",
                        "heat_dirichlet"),
               "interface": ("t", "t_wet", "s2", "strain", "heat_to_substrate",
-                            "heat_from_fluid", "steps")}
+                            "heat_from_fluid", "steps", "held", "held_excess_max")}
 
     def _stateful(self) -> dict:
         th = self.driver.thermal

@@ -129,6 +129,21 @@ stagnation-point profile and advances s by the energy integral of the erf profil
 flow (:mod:`sphfem.heat.stagnation_layer`, eq. 2'; exact at a = 0 and at the steady layer).
 It needs the fluid's kinematic viscosity ``nu_f``.
 
+The maximum principle.  Eq. (3) infers T_inf from the wall cell's temperature through
+Phi, which holds while the cell keeps the deficit of the heat it gave.  An SPH wall cell
+can lose that deficit faster than the fluid layer does: its particles move with the cell's
+mean tangential velocity (the real deficit sits at z < s, where the no-slip flow is
+slowest) and are replaced by fresh fluid from above, and the SPH conduction refills it
+across a whole spacing.  The cell then reads hotter than (3) allows and the inferred T_inf
+leaves the fluid's own temperature range (measured in the droplet job: up to 111 C from a
+100 C drop at D/dx 16).  No fluid layer can have a far field outside the temperatures the
+fluid holds, so the closure holds it there:
+
+    q_a = k_f <1/s> (T_inf,a - T_wall) / sqrt(pi),  T_inf,a held in [min T_fluid, max T_fluid]  (7)
+
+(the Robin pair becomes h_a Phi_a and the bound); ``diagnostics()`` counts the held
+node-steps and the largest excess.
+
 What the model assumes (and where it is not exact): the fluid layer is the similarity
 solution from the wetting time (stagnant: a = 0; strained: (6) with the strain of the
 wall cell, which on a no-slip wall is the strain at half a cell's height: larger than
@@ -358,6 +373,11 @@ class ContactHeatInterface:
         self.heat_to_substrate = 0.0      #: sum of the substrate's F dt [J]
         self.heat_from_fluid = 0.0        #: sum of the particles' dE [J]
         self.steps = 0
+        #: maximum principle (eq. 7): wetted node-steps whose inferred T_inf was held at
+        #: the fluid's temperature range, and the largest excess before the hold [K]
+        self.held = 0
+        self.held_excess_max = 0.0
+        self._phi_n = None
         self.last: dict = {}
         self._cache = None
 
@@ -502,7 +522,7 @@ class ContactHeatInterface:
         since T_inf - T_wall = (T_f,a - T_wall) / Phi_a(s_n) holds for the particles'
         temperatures T_f,a at the start (eq. 3) and stays constant in the ideal contact."""
         s_n = np.sqrt(self.alpha_f * np.maximum(t_w, 0.0))
-        phi = self._phi(s_n, rows, cols, w, z, h, n_nodes)
+        phi = self._phi_n = self._phi(s_n, rows, cols, w, z, h, n_nodes)
         mean_inv_sqrt = step_mean_inv_sqrt(t_w, dt)
         with np.errstate(divide="ignore"):
             return np.where(phi > 0, self.k_f * mean_inv_sqrt
@@ -513,7 +533,8 @@ class ContactHeatInterface:
         s_n = sqrt(s2) the layer at the start of the step (0: wetted inside it), ``inv_s``
         the step mean <1/s> (:func:`strained_mean_inv_s`,
         :func:`sphfem.heat.stagnation_layer.integrate_layer`)."""
-        phi = self._phi(np.sqrt(np.maximum(s2, 0.0)), rows, cols, w, z, h, n_nodes)
+        phi = self._phi_n = self._phi(np.sqrt(np.maximum(s2, 0.0)), rows, cols, w, z, h,
+                                      n_nodes)
         with np.errstate(divide="ignore", invalid="ignore"):
             return np.where(phi > 0, self.k_f * inv_s / (math.sqrt(math.pi) * phi), 0.0)
 
@@ -597,6 +618,7 @@ class ContactHeatInterface:
         hA = hA * self.sub.surface_area
         Ts0 = self.sub.surface_temperature()
         T_ext = np.where(wet, T_f, Ts0)
+        self._hold_inferred(hA, T_ext, wet, Ts0, T)
         heat = self.sub.step(dt, robin=(hA, T_ext))  # F_a dt per surface node [J]
         dry_heat = float(np.abs(heat[~wet]).sum())
         dE = np.bincount(cols, weights=w * heat[rows], minlength=len(T))
@@ -608,8 +630,32 @@ class ContactHeatInterface:
                      "heat": heat, "dry_heat": dry_heat}
         return dE
 
+    def _hold_inferred(self, hA, T_ext, wet, Ts0, T) -> None:
+        """Eq. (7): where the T_inf that eq. (3) infers from a wetted node's cell, T_wall +
+        (T_f,a - T_wall) / Phi_a, lies outside the fluid's temperatures [min T, max T], the
+        flux is k_f <1/s> (T_inf - T_wall) / sqrt(pi) with T_inf held at that bound
+        (``hA`` and ``T_ext`` changed in place: hA Phi_a, the bound)."""
+        phi = self._phi_n
+        if phi is None or not wet.any() or T.size == 0:
+            return
+        lo, hi = float(T.min()), float(T.max())
+        ok = wet & (phi > 0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            T_inf = np.where(ok, Ts0 + (T_ext - Ts0) / np.where(ok, phi, 1.0), T_ext)
+        held = ok & ((T_inf > hi) | (T_inf < lo))
+        if not held.any():
+            return
+        bound = np.clip(T_inf[held], lo, hi)
+        self.held += int(held.sum())
+        self.held_excess_max = max(self.held_excess_max,
+                                   float(np.abs(T_inf[held] - bound).max()))
+        hA[held] *= phi[held]
+        T_ext[held] = bound
+
     def diagnostics(self) -> dict:
         return {"steps": self.steps, "t": self.t,
+                "inferred_T_inf_held": self.held,
+                "inferred_T_inf_excess_max_K": self.held_excess_max,
                 "heat_to_substrate_J": self.heat_to_substrate,
                 "heat_from_fluid_J": self.heat_from_fluid,
                 "balance_rel": ((self.heat_from_fluid - self.heat_to_substrate)

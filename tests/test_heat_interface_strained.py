@@ -159,3 +159,26 @@ def test_conjugate_viscous_stagnation_contact_against_finite_volumes():
     r = run_stagnation(PAIRS["water/alumina"], "strained-viscous", prandtl=2.0)
     assert np.abs(r["eT"]).max() < 0.04
     assert np.abs(r["eQ"]).max() < 0.04
+
+
+def test_inferred_far_field_held_in_the_fluid_range():
+    """Eq. (7): a node whose cell infers T_inf = T_wall + (T_f - T_wall) / Phi outside
+    [min T, max T] of the fluid exchanges k <1/s> (bound - T_wall) / sqrt(pi): the Robin
+    pair becomes (h Phi, bound); a node inside the range keeps (h, T_f)."""
+    from types import SimpleNamespace
+
+    from coupling.heat_interface import ContactHeatInterface
+
+    itf = SimpleNamespace(_phi_n=np.array([0.5, 0.9, 0.8]), held=0, held_excess_max=0.0)
+    hA = np.array([2.0, 3.0, 4.0])
+    T_f = np.array([380.0, 350.0, 370.0])
+    Ts0 = np.full(3, 300.0)
+    T_fluid = np.array([360.0, 400.0])
+    hA1, T_ext = hA.copy(), T_f.copy()
+    ContactHeatInterface._hold_inferred(itf, hA1, T_ext, np.ones(3, bool), Ts0, T_fluid)
+    # node 0: 300 + 80 / 0.5 = 460 > 400; node 1: 300 + 50 / 0.9 = 355.6 < 360; node 2: 387.5
+    np.testing.assert_allclose(hA1, [1.0, 2.7, 4.0])
+    np.testing.assert_allclose(T_ext, [400.0, 360.0, 370.0])
+    np.testing.assert_allclose(hA1 * (T_ext - Ts0), hA * itf._phi_n * (np.array(
+        [400.0, 360.0, 387.5]) - Ts0))
+    assert itf.held == 2 and itf.held_excess_max == pytest.approx(60.0)
