@@ -229,3 +229,29 @@ def test_small_heat_scene_loads_only_the_serial_refresh(tmp_path):
     r = subprocess.run([sys.executable, "-c", _VARIANTS, str(scene)], capture_output=True,
                        text=True, check=True, env={**os.environ, "NUMBA_NUM_THREADS": "1"})
     assert json.loads(r.stdout.strip().splitlines()[-1]) == {"serial": 1, "parallel": 0}
+
+
+def test_shipped_records_resolve():
+    """Every kernel of the shipped record exists and its signatures unpickle (a renamed
+    kernel would leave a first run to compile it in the run's own process)."""
+    import base64
+    import importlib
+    import pickle
+
+    from sphfem.jit_warmup import SIGNATURES, recorded
+
+    data = json.loads(SIGNATURES.read_text())
+    assert data["scenes"]
+    checked = 0
+    for name in ("droplet_impact.toml", "droplet_impact_axisymmetric.toml"):
+        entries = recorded(load_scene(DROPLET.parent / name))
+        if entries is None:  # not recorded, or a record of another numba / Python
+            continue
+        checked += 1
+        for e in entries:
+            mname, aname = e["kernel"].split(":")
+            disp = getattr(importlib.import_module(mname), aname)
+            assert hasattr(disp, "compile")
+            assert all(isinstance(pickle.loads(base64.b64decode(s)), tuple) for s in e["sigs"])
+    if not checked:
+        pytest.skip("no record for this numba and Python")
