@@ -399,6 +399,27 @@ def _fill_mirrors(n, src, mtype, zw, gz, x, v, vg, rho, p, A, mt, mu, grad_rho, 
             dvdr[g, 1] = -dvdr[s, 1]
 
 
+@njit(cache=True)
+def _free_slip_ghost(v, vg, kind, nrm, src, mtype, vd):
+    """vd_w = ṽ - 2 ((ṽ - v_w) . n_w) n_w, ṽ = 2 v_w - vg_w, at the real WALL rows (``kind``
+    and ``nrm`` over the real rows), then copied with v_r negated onto their axis mirrors
+    (:meth:`AxisymmetricFluid._divergence_velocity`)."""
+    n = kind.shape[0]
+    for i in range(n):
+        if kind[i] != WALL:
+            continue
+        vt0 = 2.0 * v[i, 0] - vg[i, 0]
+        vt1 = 2.0 * v[i, 1] - vg[i, 1]
+        un = (vt0 - v[i, 0]) * nrm[i, 0] + (vt1 - v[i, 1]) * nrm[i, 1]
+        vd[i, 0] = vt0 - 2.0 * un * nrm[i, 0]
+        vd[i, 1] = vt1 - 2.0 * un * nrm[i, 1]
+    for q in range(src.shape[0]):
+        s = src[q]
+        if s < n and mtype[q] == 0 and kind[s] == WALL:
+            vd[n + q, 0] = -vd[s, 0]
+            vd[n + q, 1] = vd[s, 1]
+
+
 class AxisymmetricFluid:
     """Stand-alone axisymmetric delta-SPH fluid with Adami walls (module docstring).
 
@@ -717,17 +738,7 @@ class AxisymmetricFluid:
         vd = v.copy()
         if self.wall_normals is None:
             return vd
-        n = self.n
-        w = np.flatnonzero(self.kind == WALL)
-        nrm = self.wall_normals[w]
-        vt = 2.0 * v[w] - vg[w]
-        un = ((vt - v[w]) * nrm).sum(axis=1)
-        vd[w] = vt - 2.0 * un[:, None] * nrm
-        # the axis mirrors of walls: copy with v_r negated
-        q = np.flatnonzero((src < n) & (mtype == 0))
-        q = q[self.kind[src[q]] == WALL]
-        vd[n + q, 0] = -vd[src[q], 0]
-        vd[n + q, 1] = vd[src[q], 1]
+        _free_slip_ghost(v, vg, self.kind, self.wall_normals, src, mtype, vd)
         return vd
 
     # -- time stepping -------------------------------------------------------------------
