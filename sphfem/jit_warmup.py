@@ -270,7 +270,11 @@ def _compile_group(path: str) -> int:
         if job.get("progress"):
             print(f"sphfem:   [{job['tag']}] {e['kernel']} "
                   f"({time.perf_counter() - t1:.1f} s)", file=sys.stderr, flush=True)
-    print(json.dumps({"compiled": done, "failed": failed, "s": time.perf_counter() - t0}))
+    wall, cpu = time.perf_counter() - t0, time.process_time()
+    if job.get("progress"):
+        print(f"sphfem:   [{job['tag']}] done: {done} signatures in {wall:.1f} s "
+              f"({cpu:.1f} CPU-s with the imports)", file=sys.stderr, flush=True)
+    print(json.dumps({"compiled": done, "failed": failed, "s": wall, "cpu_s": cpu}))
     return 0
 
 
