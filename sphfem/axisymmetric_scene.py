@@ -205,6 +205,10 @@ class AxisymmetricFluidModule(PhysicsModule):
     """
 
     name = "fluid"
+    #: the records a resumed run continues (the spread history, the walls' impulse since
+    #: t = 0, the deepest ring, the breach time; the solver state is in the particles)
+    checkpoint_attrs = ("spread", "mom0", "impulse", "t0", "max_depth", "t_breach",
+                        "correction_impulse", "_next_spread", "spread_every")
     moves_particles = False  # it moves the fluid, but with its own list (module docstring)
     #: a ring deeper than this [dx] below the wall top has entered the second wall layer:
     #: its time is reported (``t_wall_breach_s``); one below the wall stops the run
@@ -251,8 +255,8 @@ class AxisymmetricFluidModule(PhysicsModule):
                              "(gravity[0] = 0)")
         self.solver = None
         self.spread: list[list[float]] = []
-        #: axial momentum at t = 0 and the walls' impulse since (a resumed run: None, the
-        #: budget and the spread history cover the process that started at t = 0 only)
+        #: axial momentum at t = 0 and the walls' impulse since (a resumed run takes them,
+        #: and the spread history, from the checkpoint: ``checkpoint_attrs``)
         self.mom0, self.impulse, self.t0 = None, 0.0, 0.0
         self.max_depth = -math.inf
         #: first time a fluid ring lay more than BREACH_DX below the wall top (None: never)
@@ -465,6 +469,8 @@ class AxisymmetricHeatModule(PhysicsModule):
     "explicit"`` only; ``cfl``; boundaries other than the axis are insulated (free)."""
 
     name = "heat"
+    #: the energy budget a resumed run continues (initial energy, residual, steps)
+    checkpoint_attrs = ("e0", "residual", "steps", "wall_s")
     moves_particles = False
 
     def __init__(self, scene):

@@ -334,6 +334,15 @@ def test_resume_with_substrate_heat(tmp_path):
     c_ref, c2 = (s["diagnostics"]["coupling"] for s in (s_ref, s2))
     assert c2["solves"] == c_ref["solves"]
     assert c2["t_contact_s"] == c_ref["t_contact_s"]
+    # the fluid's and the ring heat's records continue too (spread history, momentum and
+    # energy budgets from t = 0)
+    f_ref, f2 = (s["diagnostics"]["fluid"] for s in (s_ref, s2))
+    assert len(f2["spreading"]["history_t_s"]) == len(f_ref["spreading"]["history_t_s"])
+    assert f2["axial_momentum_residual_rel"] == pytest.approx(
+        f_ref["axial_momentum_residual_rel"], abs=1e-3)
+    e_ref, e2 = (s["diagnostics"]["heat"] for s in (s_ref, s2))
+    assert e2["energy_initial_J"] == e_ref["energy_initial_J"]
+    assert abs(e2["energy_residual_rel"]) < 1e-12
 
 
 def copy_scene(data):
