@@ -67,9 +67,17 @@ while the walls do not move): a flat wall acting on a fluid particle through its
 alone would push it only along the wall normal, and the contact line would not move.  The
 wall's repulsion is the wall model's pressure (Adami et al. 2012); the wall pairs of this
 pass are not added to the walls' ``f_fluid``.  Measured (sessile drop,
-:mod:`sphfem.validation.sessile_drop`): the contact line stays pinned near its start on the
-no-slip particle wall, so the prescribed angle is not reached (60 / 120 deg gave 100 / 101
-deg at R0/dx = 10); the angle follows from theta only through this relation.
+:mod:`sphfem.validation.sessile_drop`, R0/dx = 10, 6 capillary times from a half disc,
+angle from the drop's outer layer): the contact line stays near its start, no-slip or not --
+60 / 120 deg prescribed gave a mean of 90.2 / 94.1 deg over the second half on the no-slip
+Adami wall and 88.0 / 89.8 deg with ``wall_slip = "free-slip"`` (so the pinning is not the
+wall's viscous stress: the adhesion and the wall pairs of the curvature term do not make a
+net force along the wall that moves the line).  Turning the normals near walls to Young's
+direction instead (the CSF's contact angle, :mod:`sphfem.fluid.contact_angle_breinlinger2013`,
+walls as liquid in the normals, no wall pairs) gave 84 / 97 deg: the curvature term
+-gamma_k sum V_j W_ij (n_i - n_j) is not sigma kappa n, and its response to the turned
+normals at the contact line is weak and for theta > 90 deg of the wrong sign along the wall.
+The contact angle of the CSF (``csf_contact_angle``) is the working one.
 
 Time step: the capillary limit of :meth:`FluidSolver.dt_limits` with the sigma the
 constants represent; weakly compressible runs need rho0 c0^2 >> the largest pressure,

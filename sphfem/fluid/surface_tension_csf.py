@@ -85,7 +85,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
-from sphfem.fluid.contact_angle_breinlinger2013 import apply_young_normals
+from sphfem.fluid.contact_angle_breinlinger2013 import young_curvature_normals
 from sphfem.fluid.passes import grad_factor
 from sphfem.fluid.surface import color_gradient_row
 from sphfem.fluid.surface_tension import SurfaceTensionMethod, register
@@ -240,18 +240,21 @@ class CSFState:
         self.omega = np.zeros(n)
         self.kappa = np.zeros(n)
         self.kbar = np.zeros(n)
+        self.young = None  # Young's normals of the contact angle (csf_contact_angle)
 
     def accumulate(self, x, V, rho, kind, offsets, indices, R, sigma, kernel_code, period,
                    st_sigma, acc, adjust_normals=None):
-        """The three passes: normals, curvature, force (acc += CSF acceleration);
-        ``adjust_normals(g)``, if given, edits the colour gradients in place between the
-        first two (the contact angle: :mod:`sphfem.fluid.contact_angle_breinlinger2013`)."""
+        """The three passes: normals, curvature, force (acc += CSF acceleration).
+        ``adjust_normals(g, omega) -> (g_k, omega_k)``, if given, gives the normals and
+        weights the curvature is computed from (the contact angle:
+        :func:`sphfem.fluid.contact_angle_breinlinger2013.young_curvature_normals`); the
+        force keeps the colour gradient ``g`` as its direction and surface delta."""
         csf_normals(x, V, kind, offsets, indices, R, sigma, kernel_code, period, NORMAL_LO,
                     NORMAL_HI, self.g, self.omega)
-        if adjust_normals is not None:
-            adjust_normals(self.g)
+        gk, ok = (self.g, self.omega) if adjust_normals is None else adjust_normals(self.g,
+                                                                                   self.omega)
         csf_curvature(x, V, kind, offsets, indices, R, sigma, kernel_code, period, TANGENT_MIN,
-                      self.g, self.omega, self.kappa)
+                      gk, ok, self.kappa)
         csf_force(x, V, rho, kind, offsets, indices, R, sigma, kernel_code, period, st_sigma,
                   DELTA_FACTOR, SHEPARD_MIN, self.g, self.omega, self.kappa, self.kbar, acc)
 
@@ -292,9 +295,9 @@ def _accelerate(solver, state):
                                         getattr(solver.params, "csf_contact_angle", None))
     adjust = None
     if theta is not None:  # Young's normals at the walls (Breinlinger et al. 2013)
-        def adjust(g):
-            state.beta = apply_young_normals(solver, g, float(theta),
-                                             getattr(state, "beta", None))
+        def adjust(g, omega):
+            state.young = young_curvature_normals(solver, g, omega, float(theta), state.young)
+            return state.young.g, state.young.omega
     state.accumulate(p.x, s.V, p.rho, p.kind, nl.offsets, nl.indices, solver.R, solver.sigma,
                      solver.kernel_code, solver.period, solver.st_sigma, p.acc, adjust)
     return state
@@ -312,10 +315,11 @@ METHOD = register(SurfaceTensionMethod(
         Param("csf_contact_angle", float, None, ge=0.0, le=180.0,
               when=("surface_tension", ("csf",)),
               doc="equilibrium contact angle on walls [deg] (through the liquid): the "
-                  "normals of fluid particles within ~R of a wall are turned to Young's "
-                  "direction n_w cos theta + t_w sin theta (Breinlinger et al. 2013, "
-                  "sphfem.fluid.contact_angle_breinlinger2013); unset: walls count as "
-                  "liquid in the normals and the contact line has no condition"),
+                  "curvature sees Young's normals n_w cos theta + t_w sin theta on the fluid "
+                  "layer along a wall and on the wall particles next to the surface "
+                  "(Breinlinger et al. 2013, sphfem.fluid.contact_angle_breinlinger2013; "
+                  "pair with [fluid] wall_slip: a no-slip wall pins the contact line); "
+                  "unset: walls count as liquid and the contact line has no condition"),
     ),
     constant_key=None,
     calibrate=_calibrate,

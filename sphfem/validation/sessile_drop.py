@@ -1,30 +1,45 @@
-"""Validation case ``sessile-drop``: equilibrium contact angle of the Akinci et al. (2013)
-adhesion against the prescribed one (Young).
+"""Validation case ``sessile-drop``: equilibrium contact angle of a 2D drop on a flat wall
+against the prescribed (Young) angle.
 
-A 2D drop (a half disc of radius R0 = 1 mm, the area of a cap of any angle) starts on a
-flat wall (Adami wall particles, 3 layers) without gravity (Bond number 0, so the
-equilibrium shape is a circular cap).  With ``surface_tension = "akinci"`` and
-``akinci_contact_angle = theta`` the wall adhesion is gamma_a = gamma (1 + cos theta) / 2
-(Young-Dupre, :mod:`sphfem.fluid.surface_tension_akinci2013`).  The drop relaxes under a
-viscosity of Ohnesorge number ~0.2 for ``T_RELAX`` capillary times sqrt(rho R0^3 / sigma);
-then a circle is fitted to its free surface (the outermost particle of each angular bin
-about the drop's centroid, moved out by dx/2, above 2 dx from the wall), and the contact
-angle follows from the circle's centre height y_c and radius r_c over the wall face y = 0:
-cos theta = -y_c / r_c.
+A 2D drop (a half disc of radius R0 = 1 mm; ``theta0`` starts it as a cap of the same area
+at another angle) sits on a flat wall (Adami wall particles, 3 layers) without gravity
+(Bond number 0: the equilibrium shape is a circular cap).  It relaxes for ``T_RELAX``
+capillary times sqrt(rho R0^3 / sigma) under a viscosity of Ohnesorge number 0.2; the
+angle is then measured from a circle fitted to the drop's outer layer (the particles with
+|grad C| R > 0.9, moved out by dx/2, above 2 dx from the wall: lattice caps of 45-150 deg
+give their angle within 2.5 deg at R0/dx = 10-20) over the wall face y = 0:
+cos theta = -y_c / r_c.  Criterion: |theta - theta_Young| <= 5 deg (the issue's
+acceptance: twice the measurement's own lattice error) at the finest resolution for every
+angle, every run completed, the surface smooth (fit residual < 0.5 dx; lattice caps: 0.25).
+
+Model of the case: CSF with ``csf_contact_angle`` (Young's normals at the wall in the
+curvature, :mod:`sphfem.fluid.contact_angle_breinlinger2013`) on a free-slip wall
+(``wall_slip = "free-slip"``, :mod:`sphfem.fluid.wall_slip`).
 
 Status (issue 17): NOT registered with ``sphfem validate`` (the module is not in
-``sphfem.validation._CASE_MODULES``) because it does not pass.  The model's relation is
-cos theta = 2 psi - 1 with the wall colour psi = (1 + cos theta) / 2 (derived in
-:mod:`sphfem.fluid.surface_tension_akinci2013`), but the measured contact line barely moves
-from the start (a half disc, 90 deg) on the no-slip Adami wall: with the final model
-(kernel-weighted curvature pairs) prescribed 60 / 120 deg gave 100 / 101 deg at R0/dx = 10
-after 6 capillary times (82-100 / 96-106 deg over the last 3); with the paper's equal
-weights 78 / 112 deg at R0/dx = 10 and 86 / 96 deg at R0/dx = 15 after 12 capillary times
-(the drop stays a half disc, base unchanged); with kinetic damping or without viscosity
-the R0/dx = 10 drop stayed at 89-99 deg.  Before the wall particles took part
-in the curvature pairs, a flat wall could push fluid particles only along its normal and
-nothing moved; with the adhesion pair force alone (no cohesion) a one-particle film spread
-along the wall and the drop beaded up on it.  Run it with
+``sphfem.validation._CASE_MODULES``) because it does not pass.  Measured (8 capillary
+times from a half disc, mean angle over the second half; R0/dx = 10 / 15 / 20):
+
+    prescribed [deg]   45                  60                  90
+    measured [deg]     50.0 / 56.1 / 46.9  62.6 / 65.7 / 67.6  86.4 / 88.8 / 89.2
+    prescribed [deg]   120                 150
+    measured [deg]     103.3 / stop / 106.4   stop / stop / stop
+
+("stop": the drop leaves the wall and the run stops on the domain guard; 45 deg at 20:
+42-59 deg over the second half.)  The contact line moves (a no-slip wall pins it: 60 deg
+gave 66 deg at R0/dx = 10), but the final angle depends on the start: at Ohnesorge 1,
+120 deg from a half disc gave 105.7 / 109.3 / 114.1 deg (R0/dx 10 / 15 / 20), from a
+150 deg cap 118.5 deg (R0/dx 10): contact-line hysteresis.  In a stuck state (120 deg
+prescribed, 104 deg reached) the CSF pulls the bottom 3 layers inwards with 0.4 sigma
+per unit length and the pressure of the particles at the contact line pushes back as much:
+the contact line moves only by particles leaving the first layer, and the particle
+arrangement resists that like a solid.  Non-wetting drops (120-150 deg) can jump off the
+wall: the CSF with walls counted as liquid has no wall-normal adhesion.
+
+Akinci et al. (2013) with its adhesion (``run_sessile(..., method="akinci")``): the contact
+line stays near the start whether the wall slips or not (60 / 120 deg: 90.2 / 94.1 deg
+no-slip, 88.0 / 89.8 deg free-slip, R0/dx = 10; see
+:mod:`sphfem.fluid.surface_tension_akinci2013`).  Run the case with
 ``python -c "from sphfem.validation.sessile_drop import sessile_case; ..."``.
 """
 
@@ -87,10 +102,22 @@ def contact_angle(x: np.ndarray, dx: float, y_wall: float = 0.0) -> tuple[float,
     return math.degrees(math.acos(max(-1.0, min(1.0, cos_t)))), res
 
 
+def cap_lattice(R0: float, dx: float, theta0: float = 90.0) -> np.ndarray:
+    """Cell-centred lattice points (y > 0) inside the circular cap of contact angle
+    ``theta0`` [deg] on the wall y = 0 whose area is that of the half disc of radius R0:
+    r^2 (t - sin t cos t) = pi R0^2 / 2, centre height -r cos t."""
+    t = math.radians(theta0)
+    r = R0 * math.sqrt(0.5 * math.pi / (t - math.sin(t) * math.cos(t)))
+    yc = -r * math.cos(t)
+    a = math.ceil(r / dx) * dx  # box of whole cells: spacing exactly dx
+    x = lattice([-a, 0.0], [a, math.ceil((yc + r) / dx) * dx], dx)
+    return x[np.hypot(x[:, 0], x[:, 1] - yc) < r]
+
+
 def run_sessile(n_radius: int, theta: float, R0: float = 1e-3, rho0: float = 1000.0,
                 sigma: float = 0.072, Oh: float = 0.2, t_relax: float = T_RELAX,
                 fluid: dict | None = None, samples: int = 12, damping: float | None = None,
-                extra: dict | None = None, method: str = "akinci"):
+                extra: dict | None = None, method: str = "akinci", theta0: float = 90.0):
     """One drop with ``n_radius`` particles per R0 and prescribed angle ``theta`` [deg];
     returns (final angle, solver, history [(t / t_cap, angle)], fit residual / dx).
     ``damping``: zero the velocities every ``damping`` capillary times (kinetic damping:
@@ -102,8 +129,7 @@ def run_sessile(n_radius: int, theta: float, R0: float = 1e-3, rho0: float = 100
     dx = R0 / n_radius
     R = SUPPORT * dx
     L = 2.5 * R0
-    xf = lattice([-R0, 0.0], [R0, R0], dx)
-    xf = xf[np.hypot(xf[:, 0], xf[:, 1]) < R0]
+    xf = cap_lattice(R0, dx, theta0)
     xw = lattice([-L, -LAYERS * dx], [L, 0.0], dx)
     if method == "akinci":
         # c0: 1 % density change under the largest pressure (Laplace + cohesion's internal)
@@ -141,44 +167,65 @@ def run_sessile(n_radius: int, theta: float, R0: float = 1e-3, rho0: float = 100
 
 
 #: prescribed contact angles [deg] of the case
-ANGLES = (60.0, 90.0, 120.0)
+ANGLES = (45.0, 60.0, 90.0, 120.0, 150.0)
 #: largest |theta - theta_prescribed| [deg] accepted at the finest resolution
-TOLERANCE_DEG = 10.0
+TOLERANCE_DEG = 5.0
+#: the model of the case (run_sessile keywords)
+MODEL = {"method": "csf", "extra": {"wall_slip": "free-slip"}}
 
 
 @register("sessile-drop")
 def sessile_case(quick: bool = False) -> CaseResult:
-    """2D sessile drops (Akinci adhesion, Young-Dupre calibration): equilibrium contact
-    angle vs the prescribed one for three angles."""
+    """2D sessile drops (CSF with Young's normals at the wall, free-slip wall): equilibrium
+    contact angle vs the prescribed one."""
+    from sphfem.errors import SimulationStopped
+
     runs = []
-    ns = (10,) if quick else (10, 15)
+    ns = (10,) if quick else (10, 15, 20)
+    angles = (60.0, 120.0) if quick else ANGLES
+    t_relax = 8.0
     for n in ns:
-        for th in ANGLES:
+        for th in angles:
+            status = "completed"
             with Timer() as tm:
-                ang, s, hist, res = run_sessile(n, th)
-            err = abs(ang - th) / th
-            late = [a for t, a in hist if t >= 0.5 * T_RELAX]
-            runs.append(Run(f"akinci theta={th:g}", 1.0 / n, int(s.p.n), err, err, tm.s,
-                            {"theta_deg": ang, "theta_prescribed_deg": th,
-                             "abs_error_deg": abs(ang - th),
+                try:
+                    ang, s, hist, res = run_sessile(n, th, t_relax=t_relax, samples=32,
+                                                    **MODEL)
+                except SimulationStopped as e:
+                    status, ang, s, hist, res = str(e), float("nan"), None, [], float("nan")
+            late = [a for t, a in hist if t >= 0.5 * t_relax]
+            mean = float(np.mean(late)) if late and s is not None else float("nan")
+            err = abs(mean - th) / th
+            runs.append(Run(f"csf theta={th:g}", 1.0 / n, int(s.p.n) if s else 0, err, err,
+                            tm.s,
+                            {"theta_deg": mean, "theta_final_deg": ang,
+                             "theta_prescribed_deg": th, "abs_error_deg": abs(mean - th),
                              "theta_spread_deg": float(np.ptp(late)) if late else float("nan"),
-                             "fit_residual_over_dx": res, "steps": s.step_count,
+                             "fit_residual_over_dx": res, "status": status,
+                             "steps": s.step_count if s else 0,
                              "history": [(round(a, 2), round(b, 2)) for a, b in hist]}))
     fin = [r for r in runs if r.resolution == 1.0 / ns[-1]]
+
+    def worst(vals):
+        return max((v if np.isfinite(v) else math.inf) for v in vals)
+
     crit = {
-        "angle": Criterion(f"largest |theta - theta_Young| [deg] at R0/dx = {ns[-1]}",
-                           max(r.extra["abs_error_deg"] for r in fin), TOLERANCE_DEG),
+        "angle": Criterion(f"largest |theta - theta_Young| [deg] at R0/dx = {ns[-1]} (mean over "
+                           "the second half of the relaxation)",
+                           worst(r.extra["abs_error_deg"] for r in fin), TOLERANCE_DEG),
+        "completed": Criterion("runs stopped by a guard", sum(r.extra["status"] != "completed"
+                                                              for r in runs), 0),
+        "smooth": Criterion("largest circle-fit residual [dx] (lattice caps: 0.25)",
+                            worst(r.extra["fit_residual_over_dx"] for r in runs), 0.5),
     }
     notes = ["2D drop, R0 = 1 mm (half disc at the start), rho = 1000 kg/m^3, sigma = 0.072 "
-             "N/m, no gravity, Ohnesorge 0.2 (mu = 0.054 Pa s), Adami no-slip wall (3 "
-             f"layers), delta = 0.1, {T_RELAX:g} capillary times sqrt(rho R0^3/sigma) of "
-             "relaxation; c0 from 1 % density change under the Laplace plus the cohesion's "
-             "internal pressure.",
-             "Akinci cohesion (gamma from sigma), curvature weight 0.1, adhesion gamma_a = "
-             "gamma (1 + cos theta)/2 (Young-Dupre for pair potentials); the angle from a "
-             "circle fitted to the free surface above 2 dx from the wall; 'theta_spread_deg' "
-             "is the range of the angle over the second half of the relaxation (samples "
-             "every half capillary time)."]
+             "N/m, no gravity, Ohnesorge 0.2 (mu = 0.054 Pa s), Adami wall (3 layers) with "
+             "wall_slip = free-slip, delta = 0.1, CSF with csf_contact_angle, c0 = max(10 "
+             "sqrt(sigma/(rho R0)), capillary wave speed at h = R/2), "
+             f"{t_relax:g} capillary times sqrt(rho R0^3/sigma) of relaxation.",
+             "The angle: mean over the second half of the relaxation (32 samples) of the "
+             "angle of a circle fitted to the drop's outer layer above 2 dx from the wall; "
+             "'theta_spread_deg' is its range there."]
     return CaseResult("sessile-drop", runs, criteria=crit, notes=notes,
                       resolution_label="dx/R0",
                       extra_columns={"theta_deg": "theta", "theta_prescribed_deg": "Young",
