@@ -208,28 +208,6 @@ def test_recorded_kernels_compile_in_child_processes(tmp_path):
 
 
 
-_VARIANTS = textwrap.dedent("""
-    import json, sys
-    from sphfem.heat import conduction
-    from sphfem.scene import parse_scene_toml
-    from sphfem.simulation import Simulation
-    sim = Simulation(parse_scene_toml(open(sys.argv[1]).read()))
-    sim.step(sim.stable_dt()[0])
-    print(json.dumps({"serial": len(conduction._cleary_refresh_serial.overloads),
-                      "parallel": len(conduction._cleary_refresh_parallel.overloads)}))
-""")
-
-
-@pytest.mark.slow
-def test_small_heat_scene_loads_only_the_serial_refresh(tmp_path):
-    """A scene below PARALLEL_MIN particles runs the serial Cleary refresh and compiles
-    (or loads) nothing of the threaded one (an @njit chooser compiled both)."""
-    scene = tmp_path / "tiny.toml"
-    scene.write_text(_SCENE)
-    r = subprocess.run([sys.executable, "-c", _VARIANTS, str(scene)], capture_output=True,
-                       text=True, check=True, env={**os.environ, "NUMBA_NUM_THREADS": "1"})
-    assert json.loads(r.stdout.strip().splitlines()[-1]) == {"serial": 1, "parallel": 0}
-
 
 def test_shipped_records_resolve():
     """Every kernel of the shipped record exists and its signatures unpickle (a renamed

@@ -319,6 +319,7 @@ def _cleary_refresh_serial(k, x, vol, offsets, indices, R, sigma, kind, period, 
     return best
 
 
+@njit(cache=True)
 def cleary_refresh(k, x, vol, offsets, indices, R, sigma, kind, period, inv_rc, active,
                    rule_src, rule_coef, g, g_out, rows, changed):
     """The Cleary conductances from the current positions, in place, in one pass over the
@@ -330,8 +331,7 @@ def cleary_refresh(k, x, vol, offsets, indices, R, sigma, kind, period, inv_rc, 
     volume as at the last call, on the same list) keep their ``g``; pass all True the first
     time.  Threaded from :data:`~sphfem.heat.stepping.PARALLEL_MIN` particles (below it thread
     start-up costs more than the pass: ms on a loaded host against 0.2 ms for the pass on
-    800 particles).  Chosen here, in Python, so that a scene compiles only the variant it
-    runs (an ``@njit`` chooser compiles both: ~4 CPU-s on a first run)."""
+    800 particles)."""
     if x.shape[0] >= PARALLEL_MIN:
         return _cleary_refresh_parallel(k, x, vol, offsets, indices, R, sigma, kind, period,
                                         inv_rc, active, rule_src, rule_coef, g, g_out, rows,
