@@ -7,6 +7,16 @@ top-level modules; physics families live in sub-packages (``heat``, ``fluid``, `
 
 __version__ = "0.1.0"
 
+import os as _os
+
+# numba's OpenMP threading layer: let idle worker threads sleep between parallel regions
+# instead of spinning (GNU OpenMP spins by default).  On the shared 2-core machine at load
+# 8-11 the spinning made a 2-thread run of the axisymmetric droplet job 2.8x slower than
+# with sleeping threads (120 vs 43 s, 41 vs 10 CPU-s; benchmarks/README.md "Axisymmetric
+# droplet job").  Read when the OpenMP runtime starts (numba's first parallel kernel); a
+# value set by the user wins.
+_os.environ.setdefault("OMP_WAIT_POLICY", "PASSIVE")
+
 # The library facade (docs/api.md), imported on first use so that ``import sphfem`` stays
 # free of numba, scipy and scikit-fem.
 _LAZY = {
