@@ -1,0 +1,106 @@
+"""Time the axisymmetric droplet job (the droplet-impact validation's scene) per step, and
+compare two runs' results bit for bit.
+
+    python benchmarks/axisymmetric_droplet.py run V N TEND OUT
+        the scene of sphfem.validation.droplet_impact.scene_at(V, N, TEND) (V m/s, D/dx = N,
+        to TEND t_c) run into OUT; prints and writes OUT/bench.json: steps, particles, the
+        stepping loop's wall and process-CPU seconds, s/step, particle-steps/s, wall
+        seconds per module, numba threads and the load average before and after.
+    python benchmarks/axisymmetric_droplet.py compare A B
+        summary.json (timings left out), the coupling's history.json and probes.csv, and
+        every particle and substrate VTU of runs A and B: the differences, if any.
+
+Threads: NUMBA_NUM_THREADS; to time code of another commit, run from a ``git archive`` copy
+with PYTHONPATH pointing at it (benchmarks/README.md, "Axisymmetric droplet job").
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import sys
+import time
+from pathlib import Path
+
+#: summary keys that hold timings, machine or run-bookkeeping figures (not results)
+TIMING_KEYS = {"wall_s", "setup_s", "process_s", "total_s", "peak_rss_mb", "setup",
+               "wall_s_per_module", "particle_steps_per_s", "neighbor_lists", "timings",
+               "coupling_s", "scene_file", "versions", "threads", "timing_scope",
+               "checkpoint"}
+
+
+def run(V: float, N: int, t_end_tc: float, out: Path) -> dict:
+    import numba
+
+    from sphfem.output import prepare_output_dir
+    from sphfem.scene import parse_scene
+    from sphfem.simulation import Simulation
+    from sphfem.validation import droplet_impact as di
+
+    scene = parse_scene(di.scene_at(V, N, t_end_tc), source="benchmarks/axisymmetric_droplet")
+    prepare_output_dir(out, overwrite=True)
+    sim = Simulation(scene, source="benchmarks/axisymmetric_droplet")
+    load0 = os.getloadavg()
+    w0, c0 = time.perf_counter(), time.process_time()
+    s = sim.run(out, progress=False)
+    w1, c1 = time.perf_counter(), time.process_time()
+    n, steps = s["particles"]["total"], s["steps"]
+    rec = {"V": V, "N": N, "t_end_tc": t_end_tc, "threads": numba.get_num_threads(),
+           "particles": n, "steps": steps, "stepping_wall_s": s["wall_s"],
+           "run_wall_s": w1 - w0, "run_cpu_s": c1 - c0,
+           "s_per_step": s["wall_s"] / steps, "cpu_s_per_step": (c1 - c0) / steps,
+           "particle_steps_per_s": n * steps / s["wall_s"],
+           "per_module_s": s["wall_s_per_module"], "setup_s": s["setup_s"],
+           "load_before": load0, "load_after": os.getloadavg()}
+    (out / "bench.json").write_text(json.dumps(rec, indent=1))
+    return rec
+
+
+def _walk(a, b, path, out):
+    if isinstance(a, dict) and isinstance(b, dict):
+        for k in sorted(set(a) | set(b)):
+            if k in TIMING_KEYS:
+                continue
+            if k not in a or k not in b:
+                out.append(f"{path}/{k}: only in {'B' if k not in a else 'A'}")
+            else:
+                _walk(a[k], b[k], f"{path}/{k}", out)
+    elif isinstance(a, list) and isinstance(b, list) and len(a) == len(b):
+        for i, (x, y) in enumerate(zip(a, b, strict=True)):
+            _walk(x, y, f"{path}[{i}]", out)
+    elif a != b:
+        out.append(f"{path}: {a!r} vs {b!r}")
+
+
+def compare(A: Path, B: Path) -> list[str]:
+    import meshio
+    import numpy as np
+
+    out: list[str] = []
+    _walk(json.loads((A / "summary.json").read_text()),
+          json.loads((B / "summary.json").read_text()), "summary", out)
+    sub = A / "substrate"
+    for f in sorted(sub.glob("*.json")) + sorted(sub.glob("*.csv")):
+        g = B / "substrate" / f.name
+        if not g.exists() or f.read_bytes() != g.read_bytes():
+            out.append(f"{f.relative_to(A)} differs")
+    for f in sorted(A.glob("particles_*.vtu")) + sorted(sub.glob("substrate_*.vtu")):
+        ma, mb = meshio.read(f), meshio.read(B / f.relative_to(A))
+        if not (np.array_equal(ma.points, mb.points) and set(ma.point_data) == set(mb.point_data)
+                and all(np.array_equal(ma.point_data[k], mb.point_data[k])
+                        for k in ma.point_data)):
+            out.append(f"{f.relative_to(A)} differs")
+    return out
+
+
+if __name__ == "__main__":
+    if len(sys.argv) == 6 and sys.argv[1] == "run":
+        print(json.dumps(run(float(sys.argv[2]), int(sys.argv[3]), float(sys.argv[4]),
+                             Path(sys.argv[5]))))
+    elif len(sys.argv) == 4 and sys.argv[1] == "compare":
+        diffs = compare(Path(sys.argv[2]), Path(sys.argv[3]))
+        print(f"{len(diffs)} differences")
+        print("\n".join(diffs[:50]))
+        sys.exit(1 if diffs else 0)
+    else:
+        sys.exit(__doc__)
