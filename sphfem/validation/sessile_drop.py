@@ -29,7 +29,10 @@ times from a half disc, mean angle over the second half; R0/dx = 10 / 15 / 20):
 42-59 deg over the second half.)  The contact line moves (a no-slip wall pins it: 60 deg
 gave 66 deg at R0/dx = 10), but the final angle depends on the start: at Ohnesorge 1,
 120 deg from a half disc gave 105.7 / 109.3 / 114.1 deg (R0/dx 10 / 15 / 20), from a
-150 deg cap 118.5 deg (R0/dx 10): contact-line hysteresis.  In a stuck state (120 deg
+150 deg cap 118.5 deg (R0/dx 10); 60 deg at R0/dx = 20 (Ohnesorge 0.2) from a 45 deg cap
+57.2 deg, from the half disc 67.6 deg: contact-line hysteresis.  A wall of half the
+particle spacing (less corrugation) gave 65.9 / 68.4 deg (60) and 109.7 / 108.7 deg (120)
+at R0/dx = 15 / 20: the wall lattice is not the cause.  In a stuck state (120 deg
 prescribed, 104 deg reached) the CSF pulls the bottom 3 layers inwards with 0.4 sigma
 per unit length and the pressure of the particles at the contact line pushes back as much:
 the contact line moves only by particles leaving the first layer, and the particle
