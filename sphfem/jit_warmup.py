@@ -391,18 +391,21 @@ def _child(path: str) -> int:
 
 
 def _time_compilations() -> dict:
-    """``{"module:attribute": seconds}`` of this process's outermost numba compilations
-    from now on (filled as they happen: a listener on numba's ``numba:compile`` event)."""
+    """``{"module:attribute": CPU seconds}`` of this process's outermost numba compilations
+    from now on (filled as they happen: a listener on numba's ``numba:compile`` event).
+    CPU, not wall, seconds: a record made on a loaded machine still splits the work evenly
+    (the records of 64d1e29 hold wall seconds at load ~9: their two children took 77 and
+    96 CPU-s on the 3D droplet)."""
     from numba.core import event
 
     seconds, stack = {}, []
 
     class Timer(event.Listener):
         def on_start(self, ev):
-            stack.append(time.perf_counter())
+            stack.append(time.process_time())
 
         def on_end(self, ev):
-            dt = time.perf_counter() - stack.pop()
+            dt = time.process_time() - stack.pop()
             d = ev.data.get("dispatcher")
             f = getattr(d, "py_func", None)
             if not stack and f is not None:
