@@ -76,14 +76,25 @@ def _fake_case(log, compile_in=None):
 
 
 def _fresh_kernel():
-    """A numba function not compiled before (a new closure each call; no disk cache)."""
+    """A numba function not compiled before (a new closure each call; no disk cache).
+    Its body is large enough that compiling it takes well over ``COMPILE_NOTE_S`` (0.05 s)
+    even once LLVM is warm in the process (a one-line body took 0.05 s there: the note
+    then depended on the machine's speed)."""
+    import numpy as np
     from numba import njit
 
     k = float(len(_KERNELS))
 
     @njit
     def f(x):
-        return x * x + k
+        a = np.arange(64.0) * x + k
+        s = 0.0
+        for i in range(a.size):
+            for j in range(i):
+                s += np.sin(a[i] - a[j]) * np.exp(-abs(a[j])) / (1.0 + a[i] * a[i])
+        b = np.sort(a)[::-1]
+        c = np.cumsum(b) + np.linalg.norm(a)
+        return s + c[-1] + np.median(a) + np.std(a)
 
     _KERNELS.append(f)
     return f
