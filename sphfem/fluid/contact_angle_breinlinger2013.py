@@ -65,11 +65,12 @@ WALL_LO, WALL_HI = 0.3, 0.9
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
 def young_normals(x, V, kind, offsets, indices, R, sigma, kernel_code, period, cos_t, sin_t,
-                  a0, a1, g, beta):
+                  a0, a1, g, beta, gwall):
     """Rotate the inward normals ``g`` (any magnitude, kept) of fluid rows near walls
     towards Young's direction for the contact angle with cosine/sine ``cos_t``/``sin_t``
     (module doc); ``beta`` receives the blend weight of every row (0 away from walls and on
-    other rows)."""
+    other rows), ``gwall`` (n, 3) every row's wall colour gradient g_w,i (0 on other rows),
+    which :func:`young_wall_normals` reuses."""
     n, dim = x.shape
     R2 = R * R
     fac2 = sigma / (R * R)
@@ -78,6 +79,9 @@ def young_normals(x, V, kind, offsets, indices, R, sigma, kernel_code, period, c
         periodic |= period[k] > 0.0
     for i in prange(n):
         beta[i] = 0.0
+        gwall[i, 0] = 0.0
+        gwall[i, 1] = 0.0
+        gwall[i, 2] = 0.0
         if kind[i] != FLUID:
             continue
         w0 = 0.0
@@ -95,6 +99,9 @@ def young_normals(x, V, kind, offsets, indices, R, sigma, kernel_code, period, c
             w0 += t * r0
             w1 += t * r1
             w2 += t * r2
+        gwall[i, 0] = w0
+        gwall[i, 1] = w1
+        gwall[i, 2] = w2
         wn = np.sqrt(w0 * w0 + w1 * w1 + w2 * w2)
         a = (wn * R - a0) / (a1 - a0)
         if a <= 0.0:
@@ -141,13 +148,13 @@ def apply_young_normals(solver, g: np.ndarray, theta_deg: float,
     th = math.radians(theta_deg)
     young_normals(p.x, solver._scratch.V, p.kind, nl.offsets, nl.indices, solver.R,
                   solver.sigma, solver.kernel_code, solver.period, math.cos(th), math.sin(th),
-                  WALL_LO, WALL_HI, g, beta)
+                  WALL_LO, WALL_HI, g, beta, np.zeros((p.n, 3)))
     return beta
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
 def young_wall_normals(x, V, kind, offsets, indices, R, sigma, kernel_code, period, cos_t,
-                       sin_t, g, omega, g_out, omega_out):
+                       sin_t, g, omega, gwall, g_out, omega_out):
     """Young's inward normals on the wall rows next to a free surface (the interface
     continued into the wall at theta): for wall row b, from its fluid neighbours f,
 
@@ -156,10 +163,10 @@ def young_wall_normals(x, V, kind, offsets, indices, R, sigma, kernel_code, peri
         g_out[b] = -(n_w cos theta + t sin theta),
         omega_out[b] = sum_f omega_f V_f W_bf / sum_f V_f W_bf;
 
-    fluid rows copy ``g`` and ``omega``; other rows get 0."""
+    fluid rows copy ``g`` and ``omega``; other rows get 0.  ``gwall``: the fluid rows'
+    wall colour gradients grad_f C_wall of :func:`young_normals`."""
     n, dim = x.shape
     R2 = R * R
-    fac2 = sigma / (R * R)
     periodic = False
     for k in range(dim):
         periodic |= period[k] > 0.0
@@ -187,22 +194,10 @@ def young_wall_normals(x, V, kind, offsets, indices, R, sigma, kernel_code, peri
                 continue
             w = V[f] * sigma * kernel_f(np.sqrt(d2) / R, kernel_code)
             s += w
-            # the fluid particle's wall normal: -sum_wall V grad_f W over its wall neighbours
-            c0 = 0.0
-            c1 = 0.0
-            c2 = 0.0
-            for kk in range(offsets[f], offsets[f + 1]):
-                c = indices[kk]
-                if kind[c] != WALL:
-                    continue
-                e0, e1, e2 = pair_sep(x, f, c, dim, period, periodic)
-                q2 = e0 * e0 + e1 * e1 + e2 * e2
-                if q2 >= R2 or q2 == 0.0:
-                    continue
-                t = V[c] * grad_factor(np.sqrt(q2), R, fac2, kernel_code)
-                c0 -= t * e0
-                c1 -= t * e1
-                c2 -= t * e2
+            # the fluid particle's wall normal: -grad_f C_wall (out of the wall)
+            c0 = -gwall[f, 0]
+            c1 = -gwall[f, 1]
+            c2 = -gwall[f, 2]
             cn = np.sqrt(c0 * c0 + c1 * c1 + c2 * c2)
             if cn > 0.0:
                 w0 += w * c0 / cn
@@ -251,6 +246,7 @@ class YoungNormals:
         self.g = np.zeros((n, dim))
         self.omega = np.zeros(n)
         self.beta = np.zeros(n)
+        self.gwall = np.zeros((n, 3))
 
 
 def young_curvature_normals(solver, g: np.ndarray, omega: np.ndarray, theta_deg: float,
@@ -268,8 +264,8 @@ def young_curvature_normals(solver, g: np.ndarray, omega: np.ndarray, theta_deg:
     state.g0[:] = g
     young_normals(p.x, solver._scratch.V, p.kind, nl.offsets, nl.indices, solver.R,
                   solver.sigma, solver.kernel_code, solver.period, c, s, WALL_LO, WALL_HI,
-                  state.g0, state.beta)
+                  state.g0, state.beta, state.gwall)
     young_wall_normals(p.x, solver._scratch.V, p.kind, nl.offsets, nl.indices, solver.R,
                        solver.sigma, solver.kernel_code, solver.period, c, s, state.g0, omega,
-                       state.g, state.omega)
+                       state.gwall, state.g, state.omega)
     return state
