@@ -546,9 +546,9 @@ class CouplingModule(PhysicsModule):
         """The records, running peaks, contact time and, with ``[coupling.heat] model =
         "fem-contact"``, the substrate's temperature field and the contact interface's
         layer state (module docstring of :mod:`coupling.heat_interface`)."""
-        import copy
+        from sphfem.physics import snapshot_attrs
 
-        return {key: {a: copy.deepcopy(getattr(obj, a)) for a in self._STATE[key]}
+        return {key: snapshot_attrs(obj, self._STATE[key])
                 for key, obj in self._stateful().items()}
 
     def restore_state(self, ctx, state: dict) -> None:

@@ -209,7 +209,7 @@ class TemperatureMap:
             return
         tree = cKDTree(Xs)
         self.cells = particle_cells(Xs, vol, tree)
-        self.covered = _in_cells(Xt, Xs, self.cells, tree)
+        self.covered = _in_cells(Xt, Xs, self.cells)
         idx = np.nonzero(self.covered)[0]
         Xc = Xt[idx]
         m = len(idx)
@@ -296,13 +296,12 @@ def particle_cells(X, vol, tree=None, k: int | None = None, chunk: int = 4096) -
     return h
 
 
-def _in_cells(Xt, Xs, h, tree=None, rtol: float = 1e-6, chunk: int = 4096) -> np.ndarray:
+def _in_cells(Xt, Xs, h, rtol: float = 1e-6, chunk: int = 4096) -> np.ndarray:
     """True for targets inside the union of the boxes |X - x_j| <= h_j / 2 (per axis).
 
     Each source's box is searched with its own radius (a tree of the targets), so the work
     and memory follow the true overlaps: one large cell (an isolated particle, whose side
-    completes its volume) does not widen the search of every other particle.  ``tree`` (of
-    the sources) is accepted for the call signature and not needed."""
+    completes its volume) does not widen the search of every other particle."""
     from scipy.spatial import cKDTree
 
     Xt = np.atleast_2d(np.asarray(Xt, float))

@@ -34,6 +34,14 @@ def register_physics(name: str, target: str, geometry: str = "cartesian") -> Non
         GEOMETRY_MODULES[(name, geometry)] = target
 
 
+def snapshot_attrs(obj, names) -> dict:
+    """Independent copies of the attributes ``names`` of ``obj`` (a module's checkpoint
+    state: :meth:`PhysicsModule.checkpoint_state`)."""
+    import copy
+
+    return {a: copy.deepcopy(getattr(obj, a)) for a in names}
+
+
 class PhysicsModule:
     """Base class of physics modules (heat conduction, WCSPH fluid, TL-SPH solid, ...).
 
@@ -104,11 +112,9 @@ class PhysicsModule:
         has none.  The driver stores it in the checkpoint and hands it to
         :meth:`restore_state` after ``init`` on a resumed run.  Default: copies of the
         attributes named in :attr:`checkpoint_attrs`."""
-        import copy
-
         if not self.checkpoint_attrs:
             return None
-        return {a: copy.deepcopy(getattr(self, a)) for a in self.checkpoint_attrs}
+        return snapshot_attrs(self, self.checkpoint_attrs)
 
     def restore_state(self, ctx, state: dict) -> None:
         """Take back what :meth:`checkpoint_state` returned (after ``init``)."""
