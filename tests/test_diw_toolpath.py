@@ -136,3 +136,22 @@ def test_named_case_bounds_follow_the_geometry():
     path, space = named_case("bend180-large")
     assert space.n_var == 10
     assert np.all(space.upper[1::2] == 0.0)
+
+
+def test_bend90_corner_offsets_are_local_and_inward():
+    """bend90-corner: 4 free deltas at fixed s (the corner and 0.16, 0.32, 0.48 leg after
+    it); outside the fixed waypoints on the path (0.32 leg before, 0.72 leg after the
+    corner) the nozzle is on the desired path, and between them it is on the inner side
+    (signed offset <= 0: PCHIP keeps the sign of its data)."""
+    path, space = named_case("bend90-corner")
+    assert space.n_var == 4 and all(n.startswith("delta") for n in space.names)
+    np.testing.assert_array_equal(space.naive(), 0.0)
+    rng = np.random.default_rng(3)
+    for x in space.lower + rng.random((5, 4)) * (space.upper - space.lower):
+        tp = Toolpath.from_parameters(path, space, x, SPEED)
+        np.testing.assert_allclose(tp.s, [0.0, 0.34, 0.5, 0.58, 0.66, 0.74, 0.86, 1.0])
+        s_out = np.r_[np.linspace(0.0, 0.34, 50), np.linspace(0.86, 1.0, 50)]
+        np.testing.assert_allclose(tp.point(s_out), path.point(s_out), rtol=0, atol=1e-15)
+        _, _, offset = path.project(tp.point(np.linspace(0.34, 0.86, 400)))
+        assert offset.max() <= 1e-12
+        assert offset.min() >= space.lower.min() * (1 + 1e-9)

@@ -24,7 +24,9 @@ of :func:`sphfem.diw.extrusion.simulate_deposit` (see :mod:`sphfem.diw`).
 Named cases (thesis section 3.4; the thesis gives the nozzle D = 0.7 mm and the offset
 bounds, not the path lengths, so the lengths here are ours): ``bend90`` (two legs meeting
 at a right angle at the origin), ``bend180-small`` and ``bend180-large`` (two parallel legs
-joined by a half circle of radius 2 mm / 5 mm), and ``line`` (a straight line, for tests).
+joined by a half circle of radius 2 mm / 5 mm), ``line`` (a straight line, for tests), and
+``bend90-corner`` (the 90-degree bend searched with 4 inward offsets at fixed s near the
+corner: a smaller search space for small evaluation budgets).
 """
 
 from __future__ import annotations
@@ -388,6 +390,30 @@ def _case_bend90(leg=5e-3, radius=None):
     return path, specs
 
 
+#: bend90-corner: waypoints after the corner, as fractions of the leg from it
+CORNER_WAYPOINTS = (0.16, 0.32, 0.48)
+#: ... where the nozzle leaves the desired path before the corner and where it is back on
+#: it after the corner (fixed waypoints, delta = 0), as fractions of the leg from the corner
+CORNER_LEAVE, CORNER_RETURN = 0.32, 0.72
+
+
+def _case_bend90_corner(leg=5e-3, radius=None):
+    """The 90-degree bend with 4 free offsets only, all near the corner, at fixed s: the
+    corner (bisector, delta in (-0.5, 0) mm) and 3 waypoints 0.16, 0.32, 0.48 leg after it
+    (delta in (-1, 0) mm), between two fixed waypoints on the path (delta = 0) at 0.32 leg
+    before and 0.72 leg after the corner, so the offsets stay local: the rest of both legs
+    is the desired path.  The offsets point inwards only, as
+    the thesis' one-sided bounds (table 3.3): the ink that lags behind the nozzle carries
+    the first leg's direction past the corner (outwards; docs/diw.md).  The offsets' range
+    is about twice the naive overshoot at D = 0.7 mm (0.4 mm), narrower than table 3.3's
+    1.5 mm so that a budget of tens of evaluations samples it usefully."""
+    path = _bend90(leg)
+    specs = [WaypointSpec(0.5 - 0.5 * CORNER_LEAVE, 0.0), WaypointSpec(0.5, (-0.5e-3, 0.0))]
+    specs += [WaypointSpec(0.5 + 0.5 * f, (-1.0e-3, 0.0)) for f in CORNER_WAYPOINTS]
+    specs.append(WaypointSpec(0.5 + 0.5 * CORNER_RETURN, 0.0))
+    return path, specs
+
+
 def _case_bend180(leg, radius, name, n_free):
     path = _bend180(leg, radius, name)
     a, b = path.breaks[1], path.breaks[2]  # s at the start and the end of the half circle
@@ -412,7 +438,8 @@ def _case_line(leg=5e-3, radius=None):
     return path, [WaypointSpec((0.2, 0.8), (-1e-3, 1e-3))]
 
 
-CASES = {"bend90": _case_bend90, "bend180-small": _case_small,
+CASES = {"bend90": _case_bend90, "bend90-corner": _case_bend90_corner,
+         "bend180-small": _case_small,
          "bend180-large": _case_large, "line": _case_line}
 
 
