@@ -2,9 +2,11 @@
 scene run again under changes that should not matter.
 
     python benchmarks/diw_noise.py SCENE.toml --out DIR [--offsets 0,0 0.25,0.25 ...]
-                                   [--cfl 0.2 0.3] [--dx DX]
+                                   [--cfl 0.2 0.3] [--dx DX] [--best BEST_PARAMETERS.json]
 
-Each variant is the scene's naive toolpath (nozzle on the desired path) with
+Each variant is the scene's naive toolpath (nozzle on the desired path), or with ``--best``
+the toolpath of a `sphfem optimize` run's best parameters (its ``best_parameters.json``),
+with
 
 * ``offset fx,fy``: the substrate plate's particle lattice moved by (fx dx, fy dx) in the
   substrate plane (its block's ``lo`` and ``hi`` shifted; the path stays put), so the path
@@ -59,12 +61,18 @@ def variant_data(data: dict, offset=(0.0, 0.0), cfl: float | None = None,
     return d
 
 
-def run(data: dict, source: str) -> dict:
-    """Deposit of the naive toolpath of ``data``'s case, scored on the desired path."""
+def run(data: dict, source: str, params: dict | None = None) -> dict:
+    """Deposit of the toolpath of ``data``'s case with the named parameters ``params``
+    (None: the naive toolpath), scored on the desired path."""
     scene = parse_scene(data, source=source)
     ex = scene.extrusion
-    path, _ = named_case(ex.toolpath)
-    dep = simulate_deposit(scene, Toolpath.naive(path, ex.nozzle_speed))
+    path, space = named_case(ex.toolpath)
+    if params is None:
+        tool = Toolpath.naive(path, ex.nozzle_speed)
+    else:
+        x = [params[n] for n in space.names]
+        tool = Toolpath.from_parameters(path, space, x, ex.nozzle_speed)
+    dep = simulate_deposit(scene, tool)
     if dep.info.get("stopped_reason"):
         return {"failed": dep.info["stopped_reason"]}
     res = deposit_fitness(dep.positions, dep.h, dep.nozzle_diameter, path, objective="edge")
@@ -82,7 +90,9 @@ def main(argv=None) -> int:
                                                       "0.5,0.5"])
     ap.add_argument("--cfl", nargs="*", type=float, default=[0.2, 0.3])
     ap.add_argument("--dx", type=float, default=None)
+    ap.add_argument("--best", default=None, help="best_parameters.json of sphfem optimize")
     a = ap.parse_args(argv)
+    params = None if a.best is None else json.loads(Path(a.best).read_text())["parameters"]
     data = tomllib.loads(Path(a.scene).read_text())
     out = Path(a.out)
     out.mkdir(parents=True, exist_ok=True)
@@ -94,7 +104,7 @@ def main(argv=None) -> int:
         f = out / (name.replace(" ", "_").replace(",", "_") + ".json")
         if not f.exists():
             t0 = time.perf_counter()
-            res = run(variant_data(data, off, cfl, a.dx), f"{a.scene} ({name})")
+            res = run(variant_data(data, off, cfl, a.dx), f"{a.scene} ({name})", params)
             res["variant"] = name
             f.write_text(json.dumps(res, indent=1))
             print(f"{name}: {time.perf_counter() - t0:.0f} s", flush=True)
