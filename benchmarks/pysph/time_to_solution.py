@@ -1,0 +1,539 @@
+#!/usr/bin/env python
+"""Time to solution: sphfem against PySPH on PySPH's own dam-break examples, in one run.
+
+Run from the repository root with the project's Python and a PySPH venv (README.md)::
+
+    python benchmarks/pysph/time_to_solution.py --pysph-python /tmp/pysph-venv/bin/python
+
+Each case is run to a physical end time by both codes, interleaved (PySPH, ours, PySPH,
+ours, ... for ``--rounds``), every run a fresh process with 2 threads
+(``OMP_NUM_THREADS`` / ``NUMBA_NUM_THREADS``):
+
+* PySPH: the example's ``Application`` built as ``pysph run <case> --openmp`` builds it
+  (``--dx``, ``--tf``, ``--disable-output``; its recommended scheme, kernel, integrator and
+  adaptive step), in a worker process of the PySPH venv (``--pysph-worker``);
+* ours: a :class:`sphfem.fluid.wcsph.FluidSolver` on the same geometry and spacing, with
+  the project's recommended settings (the ``dambreak`` validation case's: Wendland C2,
+  support R = 3 dx, delta = 0.1, mu = 1e-3 Pa s, artificial viscosity alpha = 0.02, Adami
+  walls, the symplectic scheme of Gomez-Gesteira et al. 2012 with one force evaluation per
+  step, [time] cfl = 0.25 of h = R/2) and PySPH's c0 (10 times the dam-break speed
+  sqrt(2 g H)), in a worker process of this Python (``--ours-worker``).
+
+Neither code writes output in the timed part: both record the surge front (the largest
+x of the fluid) in a post-step callback whenever a sample time (``--sample`` s) is passed.
+The timed part is the stepping loop (PySPH: ``app.solve()``; ours: the adaptive-dt loop of
+``FluidSolver.run``); set-up (PySPH: code generation and Cython compilation, cached in
+``~/.pysph``; ours: numba, cached) is reported apart.
+
+Front error (2D): Z = (front - left wall face + dx/2) / L against T = t sqrt(2 g / L), L the
+column width (1 m): PySPH's own post-processing (``x.max()``, its wall face at dx/2) and
+the ``dambreak`` validation case's definition, compared with Koshizuka & Oka (1996) and
+Martin & Moyce (1952, n^2 = 2) as digitised in ``pysph/examples/db_exp_data.py`` at the
+experiments' sample times (relative L2).  3D (SPHERIC test 2, Kleefsman et al. 2005): the
+time the front reaches the obstacle's face x = 2.42 m against the experiment's pressure
+rise at probe P1 on that face (T = t sqrt(g/H) = 1.575-1.672 in PySPH's digitised data).
+
+Writes ``tts.json``, ``TIME_TO_SOLUTION.md`` and ``tts_front.png`` (``--out``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import json
+import math
+import os
+import statistics
+import subprocess
+import sys
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+G = 9.81
+
+#: Koshizuka & Oka (1996): Z = x/L against T = t sqrt(2 g / L), column L x 2L (PySPH's
+#: db_exp_data.ko_data; also sphfem.validation.fluid.KOSHIZUKA_OKA)
+KOSHIZUKA_OKA = [(0.0, 1.000), (0.381, 1.111), (0.769, 1.252), (1.153, 1.505),
+                 (1.537, 1.892), (1.935, 2.241), (2.323, 2.615), (2.719, 3.003),
+                 (3.096, 3.624)]
+#: Martin & Moyce (1952), n^2 = 2, a = 2.25 in, up to Z = 4 (db_exp_data.mm_data_2)
+MARTIN_MOYCE = [(0.832, 1.217), (1.219, 1.474), (1.997, 2.292), (2.547, 2.995),
+                (3.345, 4.134)]
+#: Kleefsman et al. (2005) probe P1 (x = 2.42 m, z = 0.021 m): last sample before the
+#: pressure rise and first one on it, T = t sqrt(g / H) (db_exp_data.kleefsman_exp_data_p1)
+KLEEFSMAN_P1_RISE = (1.575, 1.672)
+
+#: the cases: PySPH example, its default tf, column height H and width L, front target
+CASES = {
+    "2d": {"example": "dam_break_2d", "dx": 0.03, "tf": 2.5, "H": 2.0, "L": 1.0},
+    "3d": {"example": "dam_break_3d", "dx": 0.02, "tf": 6.0, "H": 0.55, "L": 1.228,
+           "obstacle_face": 2.42},
+}
+
+
+def loadavg() -> str:
+    try:
+        with open("/proc/loadavg") as f:
+            return " ".join(f.read().split()[:3])
+    except OSError:
+        return "n/a"
+
+
+def _front_recorder(samples: list, every: float):
+    """A closure recording (t, front) whenever t passed the next multiple of ``every``."""
+    state = {"next": every}
+
+    def record(t: float, front_fn) -> None:
+        if t >= state["next"] * (1 - 1e-12):
+            samples.append((t, front_fn()))
+            while state["next"] <= t * (1 + 1e-12):
+                state["next"] += every
+
+    return record
+
+
+# ------------------------------------------------------------------------------------------
+# PySPH worker (runs in the PySPH venv; imports nothing of sphfem)
+# ------------------------------------------------------------------------------------------
+def pysph_worker(a) -> dict:
+    import importlib
+    import tempfile
+
+    import numpy as np
+
+    case = CASES[a.case]
+    name = case["example"]
+    mod = importlib.import_module("pysph.examples." + name)
+    outdir = tempfile.mkdtemp(prefix=f"pysph_tts_{name}_")
+    if name == "dam_break_2d":
+        # the example gives its particles the module constants h and m (from its default
+        # dx = 0.03), not self.h: set them from --dx (a no-op at the default spacing)
+        mod.h = mod.hdx * a.dx
+        mod.m = mod.ro * a.dx**2
+        app = mod.DamBreak2D(fname=name, output_dir=outdir)
+    else:
+        app = mod.DamBreak3D(fname=name, output_dir=outdir)
+    argv = ["--dx", repr(a.dx), "--tf", repr(a.t_end), "--disable-output", "-q",
+            "-d", outdir, "--openmp"]
+    t0 = time.perf_counter()
+    app.setup(argv)
+    setup_s = time.perf_counter() - t0
+    fluid = [pa for pa in app.particles if pa.name == "fluid"][0]
+    n_by = {pa.name: int(pa.get_number_of_particles()) for pa in app.particles}
+    x_face = 0.5 * a.dx  # left wall face: its inner layer at x = 0, the fluid from dx
+    samples: list = [(0.0, float(fluid.x.max()) - x_face + 0.5 * a.dx)]
+    record = _front_recorder(samples, a.sample)
+    dts: list = []
+
+    def cb(s):  # called before s.t += s.dt
+        dts.append(s.dt)
+        record(s.t + s.dt, lambda: float(fluid.x.max()) - x_face + 0.5 * a.dx)
+
+    app.solver.add_post_step_callback(cb)
+    t1 = time.perf_counter()
+    c1 = time.process_time()
+    app.solve()
+    solve_s = time.perf_counter() - t1
+    cpu_s = time.process_time() - c1
+    solver = app.solver
+    dt = np.asarray(dts)
+    return {
+        "code": "pysph", "case": a.case, "example": name, "dx": a.dx,
+        "n_by_array": n_by, "n_fluid": n_by["fluid"], "n_total": sum(n_by.values()),
+        "integrator": type(solver.integrator).__name__,
+        "h": float(fluid.h.max()), "kernel": type(solver.kernel).__name__,
+        "setup_s": setup_s, "solve_s": solve_s, "cpu_s": cpu_s, "steps": int(solver.count),
+        "t_end": float(solver.t), "dt_mean": float(solver.t) / max(1, solver.count),
+        "dt_min": float(dt.min()), "dt_max": float(dt.max()), "front": samples,
+        "finite": bool(np.isfinite(fluid.x).all()),
+        "omp_num_threads": os.environ.get("OMP_NUM_THREADS"), "loadavg_end": loadavg(),
+    }
+
+
+# ------------------------------------------------------------------------------------------
+# our worker (the project's Python)
+# ------------------------------------------------------------------------------------------
+def build_ours_2d(dx: float, R_over_dx: float = 3.0, alpha: float = 0.02, cfl: float = 0.25):
+    """PySPH dam_break_2d in sphfem: its column (1/dx + 1) x (2/dx + 1) particles, spacing
+    dx, standing on the floor at the left wall of a 4 x 4 tank (3 Adami layers)."""
+    import numpy as np
+
+    from sphfem.fluid.setup import box_walls, hydrostatic_density, lattice, make_particles
+    from sphfem.fluid.wcsph import FluidParams, FluidSolver
+
+    H = CASES["2d"]["H"]
+    nx, ny = int(1.0 / dx) + 1, int(H / dx) + 1  # as pysph.tools.geometry.get_2d_block
+    xf = lattice([0.0, 0.0], [nx * dx, ny * dx], dx)
+    layers = int(np.ceil(R_over_dx))
+    xw = box_walls([0.0, 0.0], [4.0, 4.0], dx, layers)
+    c0 = 10.0 * math.sqrt(2 * G * H)  # PySPH's co
+    rhof = hydrostatic_density(ny * dx - xf[:, 1], 1000.0, c0, G)
+    ps = make_particles(xf, xw, dx, 1000.0, rhof)
+    par = FluidParams(c0=c0, mu=1e-3, gravity=(0.0, -G), alpha=alpha, cfl=cfl)
+    m = (layers + 1) * dx
+    return FluidSolver(ps, R_over_dx * dx, [-m, -m], [4.0 + m, 8.0], params=par), 0.0
+
+
+def build_ours_3d(dx: float, R_over_dx: float = 3.0, alpha: float = 0.02, cfl: float = 0.25):
+    """PySPH dam_break_3d (SPHERIC test 2) in sphfem: tank 3.22 x 1 x 1, column
+    1.228 x 1 x 0.55 at x = 0, obstacle 0.16 x 0.4 x 0.161 centred at x = 2.5 (wall
+    particles filling it), the example's lattice of spacing dx; walls 3 Adami layers."""
+    import numpy as np
+
+    from sphfem.fluid.setup import box_walls, hydrostatic_density, lattice, make_particles
+    from sphfem.fluid.wcsph import FluidParams, FluidSolver
+
+    c = CASES["3d"]
+    H, L = c["H"], c["L"]
+    xf = lattice([0.0, -0.5, 0.0], [L, 0.5, H], dx)
+    layers = int(np.ceil(R_over_dx))
+    xw = box_walls([0.0, -0.5, 0.0], [3.22, 0.5, 1.0], dx, layers)
+    xo = lattice([2.42, -0.2, 0.0], [2.58, 0.2, 0.161], dx)
+    c0 = 10.0 * math.sqrt(2 * G * H)  # the example's c0 = 10 sqrt(2 g H)
+    rhof = hydrostatic_density(H - xf[:, 2], 1000.0, c0, G)
+    ps = make_particles(xf, np.vstack([xw, xo]), dx, 1000.0, rhof)
+    par = FluidParams(c0=c0, mu=1e-3, gravity=(0.0, 0.0, -G), alpha=alpha, cfl=cfl)
+    m = (layers + 1) * dx
+    return FluidSolver(ps, R_over_dx * dx, [-m, -0.5 - m, -m], [3.22 + m, 0.5 + m, 2.0],
+                       params=par), 0.0
+
+
+def ours_worker(a) -> dict:
+    import numba
+    import numpy as np
+
+    from sphfem.particles import FLUID
+
+    t0 = time.perf_counter()
+    build = build_ours_2d if a.case == "2d" else build_ours_3d
+    s, x_face = build(a.dx, a.R_over_dx, a.alpha, a.cfl)
+    setup_s = time.perf_counter() - t0
+    fl = s.p.kind == FLUID
+
+    def front():
+        p = s.p  # a cell sort permutes the set: take the kind mask anew
+        return float(p.x[p.kind == FLUID, 0].max()) - x_face + 0.5 * a.dx
+
+    samples: list = [(0.0, front())]
+    record = _front_recorder(samples, a.sample)
+    wall0 = dict(s.wall)
+    rebuilds0 = s.n_rebuilds
+    dts: list = []
+    limits: dict = {}
+    t_end = a.t_end
+    t1 = time.perf_counter()
+    c1 = time.process_time()
+    while s.t < t_end * (1 - 1e-12):  # FluidSolver.run's loop, the front sampled
+        dt, name = s.stable_dt()
+        dt = min(dt, t_end - s.t)
+        s.step(dt)
+        s.check()
+        dts.append(dt)
+        limits[name] = limits.get(name, 0) + 1
+        record(s.t, front)
+    solve_s = time.perf_counter() - t1
+    cpu_s = time.process_time() - c1
+    wall = {k: s.wall[k] - wall0.get(k, 0.0) for k in s.wall}
+    wall["dt_and_loop"] = solve_s - sum(wall.values())
+    dt = np.asarray(dts)
+    d = s.diagnostics()
+    return {
+        "code": "sphfem", "case": a.case, "dx": a.dx, "R_over_dx": a.R_over_dx,
+        "alpha": a.alpha, "cfl": a.cfl, "c0": s.params.c0,
+        "n_fluid": int(fl.sum()), "n_total": int(s.p.n), "threads_fluid": s.nthreads,
+        "numba_threads": numba.get_num_threads(), "setup_s": setup_s, "solve_s": solve_s,
+        "cpu_s": cpu_s, "steps": len(dts), "t_end": float(s.t),
+        "dt_mean": float(s.t) / max(1, len(dts)), "dt_min": float(dt.min()),
+        "dt_max": float(dt.max()), "controlling_limit_counts": limits,
+        "front": samples, "wall_s": wall,
+        "neighbor_rebuilds": s.n_rebuilds - rebuilds0,
+        "neighbor_share": wall["neighbors"] / solve_s,
+        "rho_ratio_range": d["rho_ratio_range"], "max_speed": d["max_speed"],
+        "loadavg_end": loadavg(),
+    }
+
+
+# ------------------------------------------------------------------------------------------
+# front errors
+# ------------------------------------------------------------------------------------------
+def _interp(x, xp, fp):
+    """Linear interpolation (numpy-free, for both interpreters); xp ascending."""
+    out = []
+    for xi in x:
+        if xi <= xp[0]:
+            out.append(fp[0])
+            continue
+        if xi >= xp[-1]:
+            out.append(fp[-1])
+            continue
+        k = next(j for j in range(1, len(xp)) if xp[j] >= xi)
+        w = (xi - xp[k - 1]) / (xp[k] - xp[k - 1])
+        out.append(fp[k - 1] + w * (fp[k] - fp[k - 1]))
+    return out
+
+
+def front_errors_2d(front, L: float) -> dict:
+    """Relative L2 distance of Z(T) to Koshizuka & Oka and Martin & Moyce at their times."""
+    scale = math.sqrt(2 * G / L)
+    T = [t * scale for t, _ in front]
+    Z = [x / L for _, x in front]
+    out = {}
+    for key, data in (("koshizuka_oka", KOSHIZUKA_OKA), ("martin_moyce", MARTIN_MOYCE)):
+        te = [d[0] for d in data if d[0] <= T[-1]]
+        ze = [d[1] for d in data if d[0] <= T[-1]]
+        zc = _interp(te, T, Z)
+        num = sum((c - e) ** 2 for c, e in zip(zc, ze, strict=True))
+        den = sum(e * e for e in ze)
+        out[key] = math.sqrt(num / den) if den else float("nan")
+        out[key + "_max_abs"] = max(abs(c - e) for c, e in zip(zc, ze, strict=True))
+    out["Z_at_T3"] = _interp([3.0], T, Z)[0] if T[-1] >= 3.0 else None
+    return out
+
+
+def arrival_3d(front, x_target: float, H: float) -> dict:
+    """Time the front reaches ``x_target`` (linear between samples) against the pressure
+    rise at Kleefsman's probe P1 (midpoint of the two samples bracketing it)."""
+    t_arr = None
+    for (t0, x0), (t1, x1) in zip(front[:-1], front[1:], strict=True):
+        if x0 < x_target <= x1:
+            t_arr = t0 + (x_target - x0) / (x1 - x0) * (t1 - t0)
+            break
+    s = math.sqrt(G / H)
+    lo, hi = (T / s for T in KLEEFSMAN_P1_RISE)
+    t_exp = 0.5 * (lo + hi)
+    return {"t_arrival": t_arr, "t_exp": t_exp, "t_exp_window": [lo, hi],
+            "arrival_rel_err": (None if t_arr is None else abs(t_arr - t_exp) / t_exp)}
+
+
+# ------------------------------------------------------------------------------------------
+# driver
+# ------------------------------------------------------------------------------------------
+def _run(cmd, env_extra, timeout) -> dict:
+    env = dict(os.environ)
+    env.update(env_extra)
+    la0 = loadavg()
+    p = subprocess.run(cmd, env=env, capture_output=True, text=True, timeout=timeout)
+    if p.returncode != 0:
+        raise RuntimeError(f"worker failed ({' '.join(cmd)}):\n{p.stderr[-4000:]}")
+    r = json.loads([ln for ln in p.stdout.splitlines() if ln.startswith("{")][-1])
+    r["loadavg_start"] = la0
+    r["command"] = " ".join(f"{k}={v}" for k, v in env_extra.items()) + " " + " ".join(cmd)
+    return r
+
+
+def run_pysph(python, case, dx, t_end, sample, threads, wait_policy, timeout=7200) -> dict:
+    cmd = [python, os.path.abspath(__file__), "--pysph-worker", "--case", case,
+           "--dx", repr(dx), "--t-end", repr(t_end), "--sample", repr(sample)]
+    env = {"OMP_NUM_THREADS": str(threads)}
+    if wait_policy:
+        env["OMP_WAIT_POLICY"] = wait_policy
+    return _run(cmd, env, timeout)
+
+
+def run_ours(case, dx, t_end, sample, threads, R_over_dx, alpha, cfl, wait_policy,
+             timeout=7200) -> dict:
+    cmd = [sys.executable, os.path.abspath(__file__), "--ours-worker", "--case", case,
+           "--dx", repr(dx), "--t-end", repr(t_end), "--sample", repr(sample),
+           "--R-over-dx", repr(R_over_dx), "--alpha", repr(alpha), "--cfl", repr(cfl)]
+    env = {"NUMBA_NUM_THREADS": str(threads)}
+    if wait_policy:  # numba's threading layer is OpenMP here too: the same policy
+        env["OMP_WAIT_POLICY"] = wait_policy
+    return _run(cmd, env, timeout)
+
+
+def add_errors(r, case) -> None:
+    c = CASES[case]
+    if case == "2d":
+        r["front_error"] = front_errors_2d(r["front"], c["L"])
+    else:
+        r["front_error"] = arrival_3d(r["front"], c["obstacle_face"], c["H"])
+
+
+def git_head() -> str:
+    try:
+        return subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True,
+                              cwd=HERE).stdout.strip()
+    except OSError:
+        return ""
+
+
+def summarise(runs) -> dict:
+    """min / median of the solve wall times per code, and the ratios."""
+    out = {}
+    for code in ("pysph", "sphfem"):
+        w = [r["solve_s"] for r in runs if r["code"] == code]
+        if w:
+            out[code] = {"min_s": min(w), "median_s": statistics.median(w), "all_s": w}
+    if "pysph" in out and "sphfem" in out:
+        out["speedup_min"] = out["pysph"]["min_s"] / out["sphfem"]["min_s"]
+        out["speedup_median"] = out["pysph"]["median_s"] / out["sphfem"]["median_s"]
+        p = [r for r in runs if r["code"] == "pysph"][0]
+        o = [r for r in runs if r["code"] == "sphfem"][0]
+        out["steps_ratio"] = p["steps"] / o["steps"]
+        out["per_step_cost_ratio"] = ((out["pysph"]["min_s"] / p["steps"])
+                                      / (out["sphfem"]["min_s"] / o["steps"]))
+    return out
+
+
+def markdown(res) -> str:
+    L = [f"# Time to solution: sphfem vs PySPH dam-break examples\n",
+         f"Generated by `benchmarks/pysph/time_to_solution.py` on {res['date']} (git "
+         f"`{res['git_head'][:12]}`), {res['threads']} threads per code, runs interleaved "
+         f"(PySPH, ours, ...).  Load average (1/5/15 min) at start {res['loadavg_start']}, "
+         f"at end {res['loadavg_end']}.\n", f"Command: `{res['command']}`\n"]
+    for case, cr in res["cases"].items():
+        L.append(f"## {case}: PySPH `{CASES[case]['example']}`, dx = {cr['dx']:g}, "
+                 f"t_end = {cr['t_end']:g} s\n")
+        if case == "2d":
+            L.append("| code | round | particles (fluid / total) | wall s | CPU s | steps | "
+                     "mean dt [s] | front err vs K&O | vs M&M | Z(T=3) | load start |")
+            L.append("|---|---|---|---|---|---|---|---|---|---|---|")
+        else:
+            L.append("| code | round | particles (fluid / total) | wall s | CPU s | steps | "
+                     "mean dt [s] | front at x = 2.42 [s] | err vs Kleefsman P1 rise | "
+                     "load start |")
+            L.append("|---|---|---|---|---|---|---|---|---|---|")
+        for r in cr["runs"]:
+            e = r["front_error"]
+            head = (f"| {r['code']} | {r['round']} | {r['n_fluid']} / {r['n_total']} | "
+                    f"{r['solve_s']:.1f} | {r['cpu_s']:.1f} | {r['steps']} | "
+                    f"{r['dt_mean']:.3e} | ")
+            if case == "2d":
+                z3 = "-" if e["Z_at_T3"] is None else f"{e['Z_at_T3']:.3f}"
+                L.append(head + f"{100 * e['koshizuka_oka']:.1f} % | "
+                         f"{100 * e['martin_moyce']:.1f} % | {z3} | {r['loadavg_start']} |")
+            else:
+                ta = "-" if e["t_arrival"] is None else f"{e['t_arrival']:.3f}"
+                er = ("-" if e["arrival_rel_err"] is None
+                      else f"{100 * e['arrival_rel_err']:.1f} %")
+                L.append(head + f"{ta} | {er} | {r['loadavg_start']} |")
+        s = cr["summary"]
+        if "speedup_min" in s:
+            L.append(f"\nWall time PySPH / ours: **{s['speedup_min']:.2f}x** (minima "
+                     f"{s['pysph']['min_s']:.1f} / {s['sphfem']['min_s']:.1f} s), "
+                     f"{s['speedup_median']:.2f}x (medians); steps ratio PySPH / ours "
+                     f"{s['steps_ratio']:.2f}, cost per step PySPH / ours "
+                     f"{s['per_step_cost_ratio']:.2f}.\n")
+        o = [r for r in cr["runs"] if r["code"] == "sphfem"]
+        if o:
+            r = min(o, key=lambda r: r["solve_s"])
+            w = r["wall_s"]
+            L.append("Ours, fastest run, where the stepping time goes (the fluid module's "
+                     "timers): " + ", ".join(f"{k} {v:.2f} s ({100 * v / r['solve_s']:.1f} %)"
+                                             for k, v in w.items())
+                     + f"; {r['neighbor_rebuilds']} list rebuilds in {r['steps']} steps "
+                     f"(one per {r['steps'] / max(1, r['neighbor_rebuilds']):.1f}); "
+                     f"controlling dt limit: {r['controlling_limit_counts']}.\n")
+    return "\n".join(L)
+
+
+def plot(res, path) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    cases = list(res["cases"])
+    fig, axes = plt.subplots(1, len(cases), figsize=(6 * len(cases), 4.5), squeeze=False)
+    for ax, case in zip(axes[0], cases, strict=True):
+        cr = res["cases"][case]
+        c = CASES[case]
+        for code, style in (("pysph", "-"), ("sphfem", "--")):
+            rs = [r for r in cr["runs"] if r["code"] == code]
+            if not rs:
+                continue
+            f = rs[0]["front"]
+            if case == "2d":
+                s = math.sqrt(2 * G / c["L"])
+                ax.plot([t * s for t, _ in f], [x / c["L"] for _, x in f], style,
+                        label=f"{code} ({rs[0]['steps']} steps)")
+            else:
+                ax.plot([t for t, _ in f], [x for _, x in f], style,
+                        label=f"{code} ({rs[0]['steps']} steps)")
+        if case == "2d":
+            ax.plot(*zip(*KOSHIZUKA_OKA, strict=True), "o", label="Koshizuka & Oka (1996)")
+            ax.plot(*zip(*MARTIN_MOYCE, strict=True), "s", label="Martin & Moyce (1952)")
+            ax.set_xlabel("T = t sqrt(2g/L)")
+            ax.set_ylabel("Z = front / L")
+            ax.set_xlim(0, 3.5)
+            ax.set_ylim(1, 4.5)
+        else:
+            lo, hi = (T / math.sqrt(G / c["H"]) for T in KLEEFSMAN_P1_RISE)
+            ax.axvspan(lo, hi, color="0.8", label="Kleefsman P1 pressure rise")
+            ax.axhline(c["obstacle_face"], color="k", lw=0.8, label="obstacle face")
+            ax.set_xlabel("t [s]")
+            ax.set_ylabel("front x [m]")
+        ax.set_title(f"{c['example']}, dx = {cr['dx']:g}")
+        ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--pysph-worker", action="store_true", help=argparse.SUPPRESS)
+    ap.add_argument("--ours-worker", action="store_true", help=argparse.SUPPRESS)
+    ap.add_argument("--case", default="2d", choices=list(CASES), help=argparse.SUPPRESS)
+    ap.add_argument("--cases", nargs="+", default=["2d"], choices=list(CASES))
+    ap.add_argument("--dx", type=float, default=None,
+                    help="spacing (default: the example's, 2D 0.03, 3D 0.02)")
+    ap.add_argument("--t-end", type=float, default=None,
+                    help="physical end time (default: the example's tf, 2D 2.5 s, 3D 6 s)")
+    ap.add_argument("--sample", type=float, default=0.005, help="front sample interval [s]")
+    ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--rounds", type=int, default=2)
+    ap.add_argument("--R-over-dx", type=float, default=3.0)
+    ap.add_argument("--alpha", type=float, default=0.02)
+    ap.add_argument("--cfl", type=float, default=0.25)
+    ap.add_argument("--pysph-python", default="/tmp/pysph-venv/bin/python")
+    ap.add_argument("--omp-wait-policy", default="PASSIVE",
+                    help="OMP_WAIT_POLICY of both codes' workers ('' = unset: GNU OpenMP's "
+                         "spinning default, which collapses on a loaded machine)")
+    ap.add_argument("--out", default=HERE)
+    a = ap.parse_args(argv)
+    if a.pysph_worker or a.ours_worker:
+        a.dx = a.dx or CASES[a.case]["dx"]
+        a.t_end = a.t_end or CASES[a.case]["tf"]
+        r = pysph_worker(a) if a.pysph_worker else ours_worker(a)
+        print(json.dumps(r), flush=True)
+        return
+
+    res = {"date": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
+           "git_head": git_head(), "loadavg_start": loadavg(), "threads": a.threads,
+           "command": " ".join([os.path.relpath(sys.executable) if False else "python"]
+                               + sys.argv), "cases": {}}
+    for case in a.cases:
+        dx = a.dx or CASES[case]["dx"]
+        t_end = a.t_end or CASES[case]["tf"]
+        runs = []
+        for rnd in range(a.rounds):
+            for code in ("pysph", "sphfem"):
+                if code == "pysph":
+                    r = run_pysph(a.pysph_python, case, dx, t_end, a.sample, a.threads,
+                                  a.omp_wait_policy)
+                else:
+                    r = run_ours(case, dx, t_end, a.sample, a.threads, a.R_over_dx,
+                                 a.alpha, a.cfl, a.omp_wait_policy)
+                r["round"] = rnd
+                add_errors(r, case)
+                runs.append(r)
+                print(f"[{case} r{rnd}] {code:6s} n={r['n_total']:>7} {r['solve_s']:8.1f} s "
+                      f"{r['steps']:>7} steps dt {r['dt_mean']:.3e} err "
+                      f"{json.dumps({k: v for k, v in r['front_error'].items() if 'err' in k or k in ('koshizuka_oka', 'martin_moyce')})} "
+                      f"load {r['loadavg_start']}", flush=True)
+        res["cases"][case] = {"dx": dx, "t_end": t_end, "runs": runs,
+                              "summary": summarise(runs)}
+    res["loadavg_end"] = loadavg()
+    os.makedirs(a.out, exist_ok=True)
+    with open(os.path.join(a.out, "tts.json"), "w") as f:
+        json.dump(res, f, indent=1)
+    md = markdown(res)
+    with open(os.path.join(a.out, "TIME_TO_SOLUTION.md"), "w") as f:
+        f.write(md)
+    plot(res, os.path.join(a.out, "tts_front.png"))
+    print(md)
+
+
+if __name__ == "__main__":
+    main()
