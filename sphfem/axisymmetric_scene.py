@@ -108,11 +108,12 @@ def ring_areas(ps) -> np.ndarray:
 
 @njit(cache=True, parallel=True)
 def wall_ring_forces(x, v, vg, rho, p, mt, mu, kind, offsets, indices, Rp, s2, kcode, eps,
-                     alpha_c, out):
+                     alpha_c, fw, wall_art, out):
     """Eq. (1) of the module docstring for the real WALL rows of the fluid's augmented set
     (``kind`` WALL = real wall, fluid-like = FLUID or its mirrors MIRROR_FLUID): ``out[w]`` the
     ring force [N] of wall w; the pair terms are those of
-    :func:`sphfem.fluid.axisymmetric.forces` seen from the fluid particle."""
+    :func:`sphfem.fluid.axisymmetric.forces` seen from the fluid particle (its wall-layer
+    factor ``fw[i]`` on the viscous term, ``wall_art`` on the artificial viscosity)."""
     for w in prange(x.shape[0]):
         out[w, 0] = 0.0
         out[w, 1] = 0.0
@@ -139,10 +140,10 @@ def wall_ring_forces(x, v, vg, rho, p, mt, mu, kind, offsets, indices, Rp, s2, k
             cp = -mj * (p[i] / (ri * ri) + p[w] / (rw * rw)) * F
             rs = ri + rw
             inv = 1.0 / ((d2 + eps * hij * hij) * rs * rs)
-            cv = 4.0 * (mu[i] + mu[i]) * mj * F * d2 * inv
+            cv = 4.0 * (mu[i] + mu[i]) * mj * F * d2 * inv * fw[i]
             u0 = vg[w, 0] - v[i, 0]
             u1 = vg[w, 1] - v[i, 1]
-            cp += 2.0 * alpha_c * hij * mj * F * (u0 * r0 + u1 * r1) * rs * inv
+            cp += 2.0 * wall_art * alpha_c * hij * mj * F * (u0 * r0 + u1 * r1) * rs * inv
             M = TWO_PI * abs(x[i, 0]) * mt[i]
             f0 -= M * (cp * r0 + cv * u0)
             f1 -= M * (cp * r1 + cv * u1)
@@ -282,7 +283,7 @@ class AxisymmetricFluidModule(PhysicsModule):
             surface_tension=self.sigma_st,
             shifting=(self.params.shifting_coef if self.params.shifting != "none" else 0.0),
             shift_surface=self.params.shifting == "all", skin=self.SKIN,
-            **self.fluid_options)
+            wall_friction=self.scene.fluid.wall_friction, **self.fluid_options)
         self.nrm = nrm
         wl = np.flatnonzero(kind == WALL)
         self._walls = wl
@@ -327,12 +328,27 @@ class AxisymmetricFluidModule(PhysicsModule):
         pa = s.params
         wall_ring_forces(aug["x"], aug["v"], aug["vg"], aug["rho"], aug["p"], aug["mt"],
                          aug["mu"], aug["kind"], nl.offsets, nl.indices, aug["Rp"], s.s2,
-                         s.kcode, pa.eps_visc, pa.alpha * pa.c0, out)
+                         s.kcode, pa.eps_visc, pa.alpha * pa.c0, aug["fw"], aug["wall_art"],
+                         out)
         ps.f_fluid[idx] = out[: s.n]
         ps.f_fluid[idx[self.fl]] = 0.0
 
     def dt_limits(self, ctx) -> dict[str, float]:
         return self.solver.dt_limits()
+
+    def checkpoint_state(self, ctx) -> dict | None:
+        """The records of ``checkpoint_attrs`` and the solver's wall-layer state (its
+        thicknesses and friction factors, ``[fluid] wall_friction = "layer"``)."""
+        st = super().checkpoint_state(ctx)
+        st["_wall_layer"] = (self.solver.delta2.copy(), self.solver.fw.copy())
+        return st
+
+    def restore_state(self, ctx, state: dict) -> None:
+        state = dict(state)
+        layer = state.pop("_wall_layer", None)
+        super().restore_state(ctx, state)
+        if layer is not None:
+            self.solver.delta2[:], self.solver.fw[:] = layer
 
     def step(self, ctx, dt: float) -> None:
         from sphfem.errors import SimulationStopped

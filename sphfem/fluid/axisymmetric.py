@@ -285,13 +285,16 @@ def gradients(x, rho, vg, A, kind, offsets, indices, Rp, s2, kcode, Lz, cond_max
 
 @njit(cache=True, parallel=True)
 def forces(x, v, vg, vd, rho, p, A, mt, mu, kind, grad_rho, dvdr, offsets, indices, Rp, s2,
-           kcode, Lz, gravity, eps, delta_c, alpha_c, hoop, Bm, qh, frag_incompressible, acc,
-           drho):
+           kcode, Lz, gravity, eps, delta_c, alpha_c, hoop, Bm, qh, frag_incompressible, fw,
+           wall_art, acc, drho, gradv):
     """Accelerations and density rates of the real FLUID rows (module docstring); other
     rows are zeroed.  ``hoop``: 1.0, or 0.0 to drop the hoop terms (planar mode).  Arrays
     run over the augmented set (real + mirrors, fields filled).  Pair support R_ij =
     (R_i + R_j) / 2 and h_ij = R_ij / 2 (kernel ``s2`` / R_ij^2 W(d / R_ij), the viscous
-    eps h_ij^2, the delta term delta_c h_ij, the artificial viscosity alpha_c h_ij)."""
+    eps h_ij^2, the delta term delta_c h_ij, the artificial viscosity alpha_c h_ij).  Wall
+    pairs: the viscous term times ``fw[i]`` (:mod:`sphfem.fluid.wall_layer`), the artificial
+    viscosity times ``wall_art`` (1 or 0).  ``gradv[i]`` = (L00, L01, L10, L11), the
+    renormalised velocity gradient L_ab = d v_a / d x_b of the continuity's velocity."""
     for i in prange(x.shape[0]):
         acc[i, 0] = 0.0
         acc[i, 1] = 0.0
@@ -331,6 +334,9 @@ def forces(x, v, vg, vd, rho, p, A, mt, mu, kind, grad_rho, dvdr, offsets, indic
             rs = ri + rj
             inv = 1.0 / ((d2 + eps2) * rs * rs)
             cv = 4.0 * (mui + muj) * mj * F * d2 * inv
+            if not fl:
+                cv *= fw[i]
+                art_coef *= wall_art
             u0 = vg[j, 0] - v[i, 0]
             u1 = vg[j, 1] - v[i, 1]
             cp += 2.0 * art_coef * mj * F * (u0 * r0 + u1 * r1) * rs * inv
@@ -350,6 +356,10 @@ def forces(x, v, vg, vd, rho, p, A, mt, mu, kind, grad_rho, dvdr, offsets, indic
         nu = mui / ri
         # div_2 v = tr(G B): renormalised (B = identity: the plain sum)
         cont = -(G00 * Bm[i, 0] + (G01 + G10) * Bm[i, 1] + G11 * Bm[i, 2])
+        gradv[i, 0] = -(G00 * Bm[i, 0] + G01 * Bm[i, 1])
+        gradv[i, 1] = -(G00 * Bm[i, 1] + G01 * Bm[i, 2])
+        gradv[i, 2] = -(G10 * Bm[i, 0] + G11 * Bm[i, 1])
+        gradv[i, 3] = -(G10 * Bm[i, 1] + G11 * Bm[i, 2])
         acc[i, 0] = a0 + hoop * nu * dvdr[i, 0] + gravity[0]
         acc[i, 1] = a1 + hoop * nu * dvdr[i, 1] / rr + gravity[1]
         if Bm[i, 3] != 0.0 and frag_incompressible:  # a fragment: free, p = 0 around
@@ -463,6 +473,11 @@ class AxisymmetricFluid:
     D/dx = 32, 10 m/s impact without surface tension keeps |p| < 0.5 rho V^2 to 2.7 t_c
     (without them: spikes of 13-50 rho V^2 and a blow-up at 2.4 t_c).
 
+    ``wall_friction``: "sph" (the no-slip viscous term and the artificial viscosity on wall
+    pairs), "viscous" (the no-slip viscous term alone) or "layer" (the viscous term times the
+    unresolved-layer factor of :mod:`sphfem.fluid.wall_layer`, no artificial viscosity on
+    wall pairs; needs ``wall_normals``).
+
     ``planar=True``: plain 2D SPH in the (x, y) = (r, z) plane with a symmetry plane at
     x = 0 (the same mirrors), ``M`` then the planar masses [kg/m]: no hoop terms, A = M / rho
     (for cross-checks against :class:`~sphfem.fluid.wcsph.FluidSolver` in 2D).
@@ -485,7 +500,8 @@ class AxisymmetricFluid:
                  no_penetration: bool = False, renorm_lambda_min: float = 0.2,
                  fragment_incompressible: bool = False, shifting: float = 0.0,
                  wall_tension: bool = True, free_surface_no_tension: bool = False,
-                 shift_surface: bool = True, skin: float = 0.0):
+                 shift_surface: bool = True, skin: float = 0.0,
+                 wall_friction: str = "sph"):
         self.x = np.array(x, dtype=np.float64)
         n = self.n = self.x.shape[0]
         self.v = np.array(v, dtype=np.float64).reshape(n, 2)
@@ -550,6 +566,26 @@ class AxisymmetricFluid:
                     if surface_tension > 0.0 else None)
         self.wall_normals = None if wall_normals is None else np.asarray(
             wall_normals, float).reshape(n, 2)
+        if wall_friction not in ("sph", "viscous", "layer"):
+            raise ValueError(f"wall_friction must be 'sph', 'viscous' or 'layer', got "
+                             f"{wall_friction!r}")
+        #: "sph", "viscous" or "layer" (class docstring)
+        self.wall_friction = wall_friction
+        wl = self.kind == WALL
+        #: per-row factor of the wall pairs' viscous term (sphfem.fluid.wall_layer, eq. 3)
+        self.fw = np.ones(n)
+        #: squared shear thickness of each fluid row's wall layer [m^2] (< 0: none)
+        self.delta2 = np.full(n, -1.0)
+        if wall_friction == "layer":
+            if self.wall_normals is None or not wl.any():
+                raise ValueError("wall_friction = 'layer' needs wall particles with wall "
+                                 "normals")
+            from sphfem.fluid.wall_layer import plug_traction_constant
+
+            #: wall spacing [m] and the lattice constant S of eq. (1)
+            self.wall_dx = float(np.sqrt(np.median(self.vol[wl])))
+            self.wall_S = plug_traction_constant(kernel, self.R / self.wall_dx,
+                                                 params.eps_visc)
         #: the kinematic wall condition on the position update (needs ``wall_normals``)
         self.no_penetration = None
         wl = self.kind == WALL
@@ -695,10 +731,16 @@ class AxisymmetricFluid:
         vd = self._divergence_velocity(v, vg, src, mtype)
         acc = np.zeros((m, 2))
         drho = np.zeros(m)
+        gradv = np.zeros((m, 4))
+        fw = self._augmented_rows(self.fw, src, 1.0)
+        wall_art = 1.0 if self.wall_friction == "sph" else 0.0
         forces(x, v, vg, vd, rho, p, A, mt, mu, kind, gr, dvdr, nl.offsets, nl.indices, Rp,
                self.s2, self.kcode, self.Lz, self.gravity, pa.eps_visc, pa.delta * pa.c0,
                pa.alpha * pa.c0,
-               0.0 if self.planar else 1.0, Bm, qh, self.fragment_incompressible, acc, drho)
+               0.0 if self.planar else 1.0, Bm, qh, self.fragment_incompressible, fw,
+               wall_art, acc, drho, gradv)
+        if self.wall_friction == "layer":
+            self._layer_inputs(x, kind, nl, Rp, src, mtype, gradv, qh)
         if self.csf is not None:  # CSF over the fluid's widest support (adaptive_h)
             self.csf.accumulate(x, A, rho, kind, nl.offsets, nl.indices, n, src, mtype,
                                 float(Rp[:n][self.fluid].max()), self.Lz, acc)
@@ -709,13 +751,55 @@ class AxisymmetricFluid:
         #: the augmented state of this evaluation (real rows, then mirrors), for callers that
         #: need pair sums of it (the wall forces of sphfem.axisymmetric_scene)
         self.augmented = dict(x=x, v=v, vg=vg, rho=rho, p=p, A=A, mt=mt, mu=mu, kind=kind,
-                              Rp=Rp, nbrs=nl, src=src, mtype=mtype, grad_rho=gr)
+                              Rp=Rp, nbrs=nl, src=src, mtype=mtype, grad_rho=gr, fw=fw,
+                              wall_art=wall_art)
         #: sum_j A_j W_ij over all neighbours, self included (1 where the areas tile the
         #: plane; ~1/2 at a free surface)
         self.shepard = shep[:n].copy()
         #: smallest eigenvalue of each row's moment matrix (1 inside, ~0.5 at a free surface)
         self.lam = Bm[:n, 4].copy()
         self.wall_s["forces"] += time.perf_counter() - t1
+
+    def _augmented_rows(self, a, src, fill: float):
+        """A per-row array over the augmented set: the real rows', each axis mirror its
+        source's (wall-plane images: ``fill``)."""
+        n = self.n
+        out = np.full(n + src.shape[0], fill)
+        out[:n] = a
+        real = src < n
+        out[n:][real] = a[src[real]]
+        return out
+
+    def _layer_inputs(self, x, kind, nl, Rp, src, mtype, gradv, qh) -> None:
+        """The band, wall normals and surface divergence of the fluid rows
+        (:mod:`sphfem.fluid.wall_layer`, eq. 2) from this evaluation."""
+        from sphfem.fluid.wall_layer import band_normals, surface_divergence
+
+        n = self.n
+        nrm = np.zeros((x.shape[0], 2))
+        nrm[:n] = np.where((self.kind == WALL)[:, None], self.wall_normals, 0.0)
+        q = np.flatnonzero((src < n) & (mtype == 0))
+        nrm[n + q, 0] = -nrm[src[q], 0]
+        nrm[n + q, 1] = nrm[src[q], 1]
+        bn = np.zeros((n, 2))
+        band = np.zeros(n, np.int8)
+        band_normals(x, kind, nl.offsets, nl.indices, Rp, nrm, self.kcode, n, bn, band)
+        a = np.zeros(n)
+        hoop = qh[:n] if not self.planar else np.zeros(n)
+        surface_divergence(gradv[:n], np.ascontiguousarray(hoop), bn, band, a)
+        self._layer = (band, a, x, nl, Rp)
+
+    def _advance_layer(self, dt: float) -> None:
+        """Eq. (2) of :mod:`sphfem.fluid.wall_layer` over dt from the last evaluation, then
+        the friction factors of the next evaluations (eq. 3)."""
+        from sphfem.fluid.wall_layer import advance_layer, friction_factor
+
+        band, a, x, nl, Rp = self._layer
+        nu = self.params.mu / self.params.rho0
+        advance_layer(self.delta2, band, a, nu, dt, float(self.R) ** 2, x, nl.offsets,
+                      nl.indices, Rp, self.kcode)
+        self.fw = friction_factor(self.delta2, self.wall_dx, self.wall_S, nu, dt, self.h,
+                                  self.params.visc_cfl)
 
     def _list_valid(self, R: float) -> bool:
         """True when the list of the last build still holds every pair and mirror within R:
@@ -762,6 +846,8 @@ class AxisymmetricFluid:
         """Predictor-corrector position Verlet (:mod:`sphfem.fluid.wcsph`); particles that
         cross the axis are reflected."""
         fl = self.fluid
+        if self.wall_friction == "layer" and getattr(self, "_layer", None) is not None:
+            self._advance_layer(dt)
         v_n = self.v[fl].copy()
         rho_n = self.rho[fl].copy()
         self.x[fl] += 0.5 * dt * self.v[fl]

@@ -42,6 +42,10 @@ def _check(rec, ctx, path):
                                       "model (viscosity = \"none\" is inviscid)")
     for key in rheology.missing_keys(rec):
         ctx.error(f"{path}.{key}", f"missing: rheology = \"{rec.rheology}\" needs {key}")
+    meta = ctx.core.get("scene")
+    if rec.wall_friction != "sph" and getattr(meta, "geometry", None) != "axisymmetric":
+        ctx.error(f"{path}.wall_friction", f"wall_friction = \"{rec.wall_friction}\" is "
+                  "implemented for geometry = \"axisymmetric\" only (use \"sph\")")
     names, mats = _fluid_materials(ctx)
     if not names:
         ctx.error("physics.modules", "the fluid module needs at least one block of kind "
@@ -87,6 +91,12 @@ FLUID = Section("fluid", (
           doc="artificial viscosity coefficient (Monaghan 1992 in the always-on form of "
               "Marrone et al. 2011, pair coefficient alpha h c0, h = R/2; 0 = off, "
               "0.01-0.05 for violent free-surface flows)"),
+    Param("wall_friction", str, "sph", choices=("sph", "viscous", "layer"),
+          doc="friction of the no-slip walls (axisymmetric fluid): sph = the viscous term "
+              "and the artificial viscosity on wall pairs; viscous = the viscous term alone; "
+              "layer = the viscous term scaled to the traction mu U / delta of a wall layer "
+              "thinner than the spacing, d(delta^2)/dt = pi nu - 2 a delta^2 "
+              "(sphfem.fluid.wall_layer), no artificial viscosity on wall pairs"),
     Param("gravity", VECTOR, lambda dim: (0.0,) * dim, unit="m/s^2", default_doc="zeros",
           quantity="acceleration", doc="body force per unit mass"),
     Param("gravity_ramp", float, 0.0, unit="s", ge=0.0, quantity="time",
