@@ -66,8 +66,7 @@ KLEEFSMAN_P1_RISE = (1.575, 1.672)
 #: the cases: PySPH example, its default tf, column height H and width L, front target
 CASES = {
     "2d": {"example": "dam_break_2d", "dx": 0.03, "tf": 2.5, "H": 2.0, "L": 1.0},
-    "3d": {"example": "dam_break_3d", "dx": 0.02, "tf": 6.0, "H": 0.55, "L": 1.228,
-           "obstacle_face": 2.42},
+    "3d": {"example": "dam_break_3d", "dx": 0.02, "tf": 6.0, "H": 0.55, "L": 1.228},
 }
 
 
@@ -174,28 +173,59 @@ def build_ours_2d(dx: float, R_over_dx: float = 3.0, alpha: float = 0.02, cfl: f
     return FluidSolver(ps, R_over_dx * dx, [-m, -m], [4.0 + m, 8.0], params=par), 0.0
 
 
+def pysph_3d_boxes(dx: float) -> dict:
+    """Boxes (lo, hi) of PySPH dam_break_3d's particle sets on its lattice (points at
+    multiples of dx in x and z, at -0.5 + k dx in y; each box reaches dx/2 beyond its
+    outer points): the tank's inside (its inner wall layer on x = 0, 3.22, y = +-0.5,
+    z = 0), the fluid column (0 < x <= 1.228, |y| < 0.5, 0 < z <= 0.55) and the obstacle
+    (2.42 <= x <= 2.58, |y| <= 0.2, 0 < z <= 0.161)."""
+    eps = 1e-9 * dx
+
+    def span(a, b, off=0.0, open_a=True, open_b=False):
+        k0 = math.floor((a - off) / dx + eps) + (1 if open_a else 0)
+        if not open_a and abs((a - off) / dx - round((a - off) / dx)) > 1e-9:
+            k0 = math.ceil((a - off) / dx)
+        k1 = math.ceil((b - off) / dx - eps) - (1 if open_b else 0)
+        if not open_b and abs((b - off) / dx - round((b - off) / dx)) > 1e-9:
+            k1 = math.floor((b - off) / dx)
+        return off + (k0 - 0.5) * dx, off + (k1 + 0.5) * dx
+
+    fx, fy, fz = span(0.0, 1.228), span(-0.5, 0.5, -0.5, True, True), span(0.0, 0.55)
+    ox = span(2.42, 2.58, 0.0, False, False)
+    oy = span(-0.2, 0.2, -0.5, False, False)
+    oz = span(0.0, 0.161)
+    tx, ty = span(0.0, 3.22, 0.0, True, True), span(-0.5, 0.5, -0.5, True, True)
+    return {"fluid": ([fx[0], fy[0], fz[0]], [fx[1], fy[1], fz[1]]),
+            "obstacle": ([ox[0], oy[0], oz[0]], [ox[1], oy[1], oz[1]]),
+            "tank": ([tx[0], ty[0], 0.5 * dx], [tx[1], ty[1], 1.0])}
+
+
 def build_ours_3d(dx: float, R_over_dx: float = 3.0, alpha: float = 0.02, cfl: float = 0.25):
-    """PySPH dam_break_3d (SPHERIC test 2) in sphfem: tank 3.22 x 1 x 1, column
-    1.228 x 1 x 0.55 at x = 0, obstacle 0.16 x 0.4 x 0.161 centred at x = 2.5 (wall
-    particles filling it), the example's lattice of spacing dx; walls 3 Adami layers."""
+    """PySPH dam_break_3d (SPHERIC test 2) in sphfem, in the example's coordinates: the
+    same fluid and obstacle particles (:func:`pysph_3d_boxes`; the obstacle filled with
+    wall particles), the tank's inside bounded by 3 Adami layers whose inner one sits where
+    PySPH's single layer sits."""
     import numpy as np
 
     from sphfem.fluid.setup import box_walls, hydrostatic_density, lattice, make_particles
     from sphfem.fluid.wcsph import FluidParams, FluidSolver
 
-    c = CASES["3d"]
-    H, L = c["H"], c["L"]
-    xf = lattice([0.0, -0.5, 0.0], [L, 0.5, H], dx)
+    H = CASES["3d"]["H"]
+    b = pysph_3d_boxes(dx)
+    xf = lattice(*b["fluid"], dx)
     layers = int(np.ceil(R_over_dx))
-    xw = box_walls([0.0, -0.5, 0.0], [3.22, 0.5, 1.0], dx, layers)
-    xo = lattice([2.42, -0.2, 0.0], [2.58, 0.2, 0.161], dx)
+    xw = box_walls(*b["tank"], dx, layers)
+    xo = lattice(*b["obstacle"], dx)
     c0 = 10.0 * math.sqrt(2 * G * H)  # the example's c0 = 10 sqrt(2 g H)
-    rhof = hydrostatic_density(H - xf[:, 2], 1000.0, c0, G)
+    top = b["fluid"][1][2]
+    rhof = hydrostatic_density(top - xf[:, 2], 1000.0, c0, G)
     ps = make_particles(xf, np.vstack([xw, xo]), dx, 1000.0, rhof)
     par = FluidParams(c0=c0, mu=1e-3, gravity=(0.0, 0.0, -G), alpha=alpha, cfl=cfl)
     m = (layers + 1) * dx
-    return FluidSolver(ps, R_over_dx * dx, [-m, -0.5 - m, -m], [3.22 + m, 0.5 + m, 2.0],
-                       params=par), 0.0
+    lo, hi = b["tank"]
+    s = FluidSolver(ps, R_over_dx * dx, [lo[0] - m, lo[1] - m, lo[2] - m],
+                    [hi[0] + m, hi[1] + m, 2.0], params=par)
+    return s, lo[0]
 
 
 def ours_worker(a) -> dict:
@@ -345,8 +375,9 @@ def add_errors(r, case) -> None:
     c = CASES[case]
     if case == "2d":
         r["front_error"] = front_errors_2d(r["front"], c["L"])
-    else:
-        r["front_error"] = arrival_3d(r["front"], c["obstacle_face"], c["H"])
+    else:  # the front measured from the left wall face: the obstacle face of the lattice
+        lo, _ = pysph_3d_boxes(r["dx"])["obstacle"]
+        r["front_error"] = arrival_3d(r["front"], lo[0], c["H"])
 
 
 def git_head() -> str:
