@@ -124,8 +124,13 @@ def pysph_worker(a) -> dict:
     record = _front_recorder(samples, a.sample)
     dts: list = []
 
+    progress = os.environ.get("TTS_PROGRESS")  # print t, front every N steps (debugging)
+
     def cb(s):  # called before s.t += s.dt
         dts.append(s.dt)
+        if progress and len(dts) % int(progress) == 0:
+            print(f"step {len(dts)} t {s.t + s.dt:.4f} front {fluid.x.max():.4f} "
+                  f"ymax {fluid.y.max():.3f}", file=sys.stderr, flush=True)
         record(s.t + s.dt, lambda: float(fluid.x.max()) - x_face + 0.5 * a.dx)
 
     app.solver.add_post_step_callback(cb)
