@@ -27,8 +27,11 @@ mechanical tension of a flat interface, sigma = int (P_N - P_T) dz with the pair
 (Kirkwood-Buff), evaluated as lattice sums at the run's R / dx on a hexagonal (2D) / cubic
 (3D) lattice (:func:`lattice_sums`; the continuum half-space integral AKINCI_C is their
 limit, 6 % (2D) / 14 % (3D) below the cohesion's sum at R = 3 dx).  The curvature forces
-are normal to a flat interface; they count through the EOS pressure that balances them
-(the surface layer is stretched: positive tension).  ``akinci_curvature`` = phi is the
+are normal to a flat interface; they count through the pressure that balances them (the
+surface layer is stretched: positive tension), and that pressure is the SPH one: its
+symmetric gradient over the truncated support of the surface layers is not isotropic, and
+the tension it holds is 38 % above the continuum pressure's (:func:`sph_curvature_tension`,
+R = 3 dx, 2D; 43 % in 3D), which calibrates gamma_k.  ``akinci_curvature`` = phi is the
 share of sigma carried by the curvature term: gamma for (1 - phi) sigma, gamma_k [m/s^2]
 for phi sigma (:func:`akinci_constants`).
 
@@ -46,11 +49,22 @@ equilibrium; square-lattice constants, c0 from the cohesion's pressure): the l =
 phi = 0.9 it is 0.94 at R_drop = 10 dx but 0.83 at 20 dx (the cohesion's share of the
 stiffness grows with R_drop / R).  The curvature term depends
 on the particles only through the colour gradient, which vanishes in the bulk, so it adds
-no bulk stiffness: with phi = 1 (and the kernel weights) the period is 0.973 / 1.013 /
-1.048 / 1.047 T_Rayleigh at R_drop = 10 / 20 / 30 / 40 dx (1.6 periods after 0.3 at rest;
-``sphfem validate droplet-oscillation``, 40 dx run separately): within 5 %, but not
-converging.  Its surface stays smooth at R_drop = 10 dx (ripple 0.008 dx); at 20-40 dx it
-roughens within ~1 period to 0.11-0.15 dx and stays there (at 20 dx to 2.2 periods).
+no bulk stiffness.
+
+Density diffusion (delta-SPH) must be off (``[fluid] delta = 0``; :func:`_calibrate` warns):
+the curvature forces on a flat surface are held by a pressure step between the outer
+layers, a profile at the particle scale that the diffusive term of the continuity equation
+(Antuono et al. 2010; its renormalised gradient falls back at the free surface) relaxes
+within ~1e-3 period (dx^2 / (delta h c0)); the surface layers then move to rebuild it and
+the surface roughens.  Measured on the 2D droplet (``sphfem validate droplet-oscillation``,
+R_drop = 20 dx, 2 periods after 0.3 at rest; rms ripple of the outermost particles,
+``surface_ripple``): delta = 0.1 grows the ripple from 0.006 dx to 0.10-0.15 dx within ~1.2
+periods (3x c0: 0.18 dx; alpha = 0.1: 0.12 dx); delta = 0 keeps it <= 0.015 dx at R_drop =
+10 / 20 / 30 dx, not growing.  The diffusion also relaxed the tension: with delta = 0.1 the
+period was 0.973 / 1.013 / 1.048 T_Rayleigh at 10 / 20 / 30 dx under the continuum-pressure
+calibration, which with delta = 0 gives 0.890 / 0.875 / 0.866 (a tension of 1.26-1.33 sigma;
+interior pressure 1.50 sigma / R_drop at 10 and 20 dx).  With the SPH-pressure calibration
+and delta = 0: 1.056 / 1.036 / PERIOD30 T_Rayleigh, ripple <= RIPPLE30 dx.
 
 Wetting (Akinci's adhesion replaced by a construction with a Young relation for both terms):
 the wall carries the colour psi = (1 + cos theta) / 2, theta = ``akinci_contact_angle``
@@ -87,6 +101,7 @@ the curvature forces' normal stress, both ~sigma / R).
 
 from __future__ import annotations
 
+import logging
 import math
 from functools import lru_cache
 
@@ -100,6 +115,8 @@ from sphfem.neighbors import build_neighbor_list
 from sphfem.particles import FLUID, WALL
 from sphfem.schema import Param
 from sphfem.smallmat import pair_sep
+
+logger = logging.getLogger(__name__)
 
 #: default share of sigma carried by the curvature term (``akinci_curvature``; see the
 #: module doc: the cohesion makes the particle lattice elastic)
@@ -132,8 +149,9 @@ def _wendland_dwdq(q, dim):
 
 
 def lattice_tensions(dim: int, R_over_dx: float) -> tuple[float, float]:
-    """(S_c, S_k) of :func:`lattice_sums`."""
-    return lattice_sums(dim, R_over_dx)[:2]
+    """The calibration sums: S_c of :func:`lattice_sums` (cohesion) and the curvature
+    term's tension under the SPH pressure, :func:`sph_curvature_tension`."""
+    return lattice_sums(dim, R_over_dx)[0], sph_curvature_tension(dim, R_over_dx)
 
 
 def _slab(dim: int, R: float, square: bool = False):
@@ -155,6 +173,31 @@ def _slab(dim: int, R: float, square: bool = False):
     return x, x[:, -1].astype(int), np.full(dim - 1, float(ncol))
 
 
+def _slab_pairs(dim: int, R: float, square: bool):
+    """Pair arrays of :func:`_slab` (R in units of the spacing): separations ``d`` (n, n,
+    dim, r = x_j - x_i, minimum image sideways), in-support mask, distances (1 outside),
+    q = |r| / R, the gradient factor F (grad_i W_ij = F r), the kernel W_ij, the rows and
+    the lateral area A."""
+    x, row, per = _slab(dim, R, square)
+    d = x[None, :, :] - x[:, None, :]
+    for k in range(dim - 1):
+        d[..., k] -= per[k] * np.round(d[..., k] / per[k])
+    dist = np.sqrt((d**2).sum(-1))
+    m = (dist > 0) & (dist < R)
+    dd = np.where(m, dist, 1.0)
+    q = np.where(m, dist / R, 1.0)
+    F = np.where(m, -_wendland_dwdq(q, dim) / R**dim / R / dd, 0.0)
+    c_w = 7.0 / math.pi if dim == 2 else 21.0 / (2.0 * math.pi)
+    W = np.where(m, c_w / R**dim * (1.0 - q) ** 4 * (1.0 + 4.0 * q), 0.0)
+    return d, m, dd, q, F, W, row, float(np.prod(per))
+
+
+def _curvature_pairs(d, F, W, R):
+    """V_j W_ij (n_i - n_j)_n of the slab (normals n = R grad C, unit volumes)."""
+    nrm = R * np.einsum("ij,ij->i", F, d[..., -1])
+    return W * (nrm[:, None] - nrm[None, :])
+
+
 @lru_cache(maxsize=32)
 def lattice_sums(dim: int, R_over_dx: float, square: bool = False) -> tuple[float, float, float]:
     """(S_c, S_k, P_k): tension of a flat interface per unit gamma rho0^2 R^2 (cohesion) and
@@ -171,34 +214,55 @@ def lattice_sums(dim: int, R_over_dx: float, square: bool = False) -> tuple[floa
         4 sigma_c A = sum gamma m^2 C(|r|) (r_x^2 - r_n^2) / |r|
         4 sigma_k A = sum m gamma_k V_j W_ij r_n (n_i - n_j)_n        (paper's sign)
 
-    (in equilibrium the EOS pressure cancels the normal stress, so the curvature term,
-    whose forces are normal to the slab, counts through its normal stress alone).  P_k:
-    the normal force per area of each row accumulated from the face.
+    with a continuum (isotropic) pressure balancing the normal stress; the SPH pressure
+    that balances the curvature forces is not isotropic in the surface layers, see
+    :func:`sph_curvature_tension`, which calibrates the curvature term.  P_k: the normal
+    force per area of each row accumulated from the face.
     """
     R = R_over_dx
-    x, row, per = _slab(dim, R, square)
-    d = x[None, :, :] - x[:, None, :]  # r = x_j - x_i
-    for k in range(dim - 1):  # minimum image sideways
-        d[..., k] -= per[k] * np.round(d[..., k] / per[k])
-    dist = np.sqrt((d**2).sum(-1))
-    m = (dist > 0) & (dist < R)
-    dd = np.where(m, dist, 1.0)
-    q = np.where(m, dist / R, 1.0)
-    F = np.where(m, -_wendland_dwdq(q, dim) / R**dim / R / dd, 0.0)
-    nrm = R * np.einsum("ij,ij->i", F, d[..., -1])  # normal component (V = 1)
-    c_w = 7.0 / math.pi if dim == 2 else 21.0 / (2.0 * math.pi)
-    Wk = np.where(m, c_w / R**dim * (1.0 - q) ** 4 * (1.0 + 4.0 * q), 0.0)  # V_j W_ij
+    d, m, dd, q, F, W, row, A = _slab_pairs(dim, R, square)
     C = np.where(m, _akinci_c(q) / R**dim, 0.0)
-    A = float(np.prod(per))
     rn = d[..., -1]
     S_c = float(np.sum(C * (d[..., 0] ** 2 - rn**2) / dd)) / (4 * A * R * R)
-    dn = Wk * (nrm[:, None] - nrm[None, :])
+    dn = _curvature_pairs(d, F, W, R)
     S_k = float(np.sum(rn * dn)) / (4 * A * R * R)
     fy = -dn.sum(1)  # paper's sign, per particle (m = 1)
     rows = row.max() + 1
     per_row = np.bincount(row, weights=fy, minlength=rows) / A
     P_k = float(np.abs(np.cumsum(per_row[: rows // 2])).max())
     return S_c, S_k, P_k / R
+
+
+@lru_cache(maxsize=32)
+def sph_curvature_tension(dim: int, R_over_dx: float, square: bool = False) -> float:
+    """Tension of a flat interface per unit gamma_k rho0 R^2 of the curvature term held by
+    the SPH pressure: the slab of :func:`lattice_sums` (unit mass and density) with the
+    row pressures p_k for which every row is in equilibrium under the curvature forces
+    and the symmetric SPH pressure gradient a_i = -sum_j (p_i + p_j) grad_i W_ij (Park 2019
+    eq. 2.85; outside the slab p = 0), and the tension from the virial of both pair forces,
+    2 sigma A = -1/2 sum_(i,j) (r_n f_n - r_x f_x):
+
+        4 sigma_k A = sum V_j W_ij r_n (n_i - n_j)_n
+                      + sum (p_i + p_j) F_ij (r_n^2 - r_x^2).
+
+    The second sum, zero for an isotropic pressure, is the anisotropy of the SPH pressure
+    stress in the truncated support of the surface layers.  It raises the tension by 38 %
+    at R = 3 dx (2D hexagonal; 42 % square, 32 % at R = 12 dx): a model calibrated by
+    :func:`lattice_sums` alone carries ~1.3-1.5 sigma (module doc)."""
+    R = R_over_dx
+    d, m, dd, q, F, W, row, A = _slab_pairs(dim, R, square)
+    rn = d[..., -1]
+    dn = _curvature_pairs(d, F, W, R)
+    rows = row.max() + 1
+    # row balance: -p_i sum_j F r_n - sum_j p_j F r_n - sum_j dn = 0, p constant per row
+    Fr = F * rn
+    onehot = np.eye(rows)[row]  # (n, rows)
+    M = -(onehot.T @ (Fr.sum(1)[:, None] * onehot) + onehot.T @ Fr @ onehot)
+    b = np.bincount(row, weights=dn.sum(1), minlength=rows)
+    p = np.linalg.lstsq(M, b, rcond=None)[0][row]
+    rx = d[..., 0]
+    pressure = float(np.sum((p[:, None] + p[None, :]) * F * (rn**2 - rx**2)))
+    return (float(np.sum(rn * dn)) + pressure) / (4 * A * R * R)
 
 
 def akinci_constants(sigma: float, rho0: float, R: float, dx: float, dim: int,
@@ -346,6 +410,12 @@ def _calibrate(pa, m_bar: float, R: float, dim: int):
     contact angle (the wall colour psi, module doc)."""
     dx = (m_bar / pa.rho0) ** (1.0 / dim)
     share = _share(pa)
+    if share > 0.0 and getattr(pa, "delta", 0.0) > 0.0:
+        logger.warning("surface_tension = 'akinci' with delta = %g: the density diffusion "
+                       "relaxes the pressure step that holds the curvature forces in the "
+                       "surface layers; the surface roughens and the tension drifts "
+                       "(sphfem.fluid.surface_tension_akinci2013): set [fluid] delta = 0",
+                       pa.delta)
     S_c, S_k = lattice_tensions(dim, round(R / dx, 6))
     gamma = pa.st_params.get("akinci_gamma", getattr(pa, "akinci_gamma", None))
     if gamma is None:
