@@ -64,7 +64,8 @@ periods (3x c0: 0.18 dx; alpha = 0.1: 0.12 dx); delta = 0 keeps it <= 0.015 dx a
 period was 0.973 / 1.013 / 1.048 T_Rayleigh at 10 / 20 / 30 dx under the continuum-pressure
 calibration, which with delta = 0 gives 0.890 / 0.875 / 0.866 (a tension of 1.26-1.33 sigma;
 interior pressure 1.50 sigma / R_drop at 10 and 20 dx).  With the SPH-pressure calibration
-and delta = 0: 1.056 / 1.036 / PERIOD30 T_Rayleigh, ripple <= RIPPLE30 dx.
+and delta = 0: 1.056 / 1.036 / 1.024 T_Rayleigh (2 periods), ripple <= 0.011 / 0.014 /
+0.023 dx, the last third no rougher than the first (tests/test_surface_tension_akinci_ripple.py).
 
 Wetting (Akinci's adhesion replaced by a construction with a Young relation for both terms):
 the wall carries the colour psi = (1 + cos theta) / 2, theta = ``akinci_contact_angle``
