@@ -157,7 +157,8 @@ def pysph_worker(a) -> dict:
 # ------------------------------------------------------------------------------------------
 # our worker (the project's Python)
 # ------------------------------------------------------------------------------------------
-def build_ours_2d(dx: float, R_over_dx: float = 3.0, alpha: float = 0.02, cfl: float = 0.25):
+def build_ours_2d(dx: float, R_over_dx: float = 3.0, alpha: float = 0.02, cfl: float = 0.25,
+                  threads: int = 0):
     """PySPH dam_break_2d in sphfem: its column (1/dx + 1) x (2/dx + 1) particles, spacing
     dx, standing on the floor at the left wall of a 4 x 4 tank (3 Adami layers)."""
     import numpy as np
@@ -173,7 +174,8 @@ def build_ours_2d(dx: float, R_over_dx: float = 3.0, alpha: float = 0.02, cfl: f
     c0 = 10.0 * math.sqrt(2 * G * H)  # PySPH's co
     rhof = hydrostatic_density(ny * dx - xf[:, 1], 1000.0, c0, G)
     ps = make_particles(xf, xw, dx, 1000.0, rhof)
-    par = FluidParams(c0=c0, mu=1e-3, gravity=(0.0, -G), alpha=alpha, cfl=cfl)
+    par = FluidParams(c0=c0, mu=1e-3, gravity=(0.0, -G), alpha=alpha, cfl=cfl,
+                      threads=threads)
     m = (layers + 1) * dx
     return FluidSolver(ps, R_over_dx * dx, [-m, -m], [4.0 + m, 8.0], params=par), 0.0
 
@@ -205,7 +207,8 @@ def pysph_3d_boxes(dx: float) -> dict:
             "tank": ([tx[0], ty[0], 0.5 * dx], [tx[1], ty[1], 1.0])}
 
 
-def build_ours_3d(dx: float, R_over_dx: float = 3.0, alpha: float = 0.02, cfl: float = 0.25):
+def build_ours_3d(dx: float, R_over_dx: float = 3.0, alpha: float = 0.02, cfl: float = 0.25,
+                  threads: int = 0):
     """PySPH dam_break_3d (SPHERIC test 2) in sphfem, in the example's coordinates: the
     same fluid and obstacle particles (:func:`pysph_3d_boxes`; the obstacle filled with
     wall particles), the tank's inside bounded by 3 Adami layers whose inner one sits where
@@ -225,7 +228,8 @@ def build_ours_3d(dx: float, R_over_dx: float = 3.0, alpha: float = 0.02, cfl: f
     top = b["fluid"][1][2]
     rhof = hydrostatic_density(top - xf[:, 2], 1000.0, c0, G)
     ps = make_particles(xf, np.vstack([xw, xo]), dx, 1000.0, rhof)
-    par = FluidParams(c0=c0, mu=1e-3, gravity=(0.0, 0.0, -G), alpha=alpha, cfl=cfl)
+    par = FluidParams(c0=c0, mu=1e-3, gravity=(0.0, 0.0, -G), alpha=alpha, cfl=cfl,
+                      threads=threads)
     m = (layers + 1) * dx
     lo, hi = b["tank"]
     s = FluidSolver(ps, R_over_dx * dx, [lo[0] - m, lo[1] - m, lo[2] - m],
@@ -241,7 +245,7 @@ def ours_worker(a) -> dict:
 
     t0 = time.perf_counter()
     build = build_ours_2d if a.case == "2d" else build_ours_3d
-    s, x_face = build(a.dx, a.R_over_dx, a.alpha, a.cfl)
+    s, x_face = build(a.dx, a.R_over_dx, a.alpha, a.cfl, a.ours_threads)
     setup_s = time.perf_counter() - t0
     fl = s.p.kind == FLUID
 
@@ -316,6 +320,9 @@ def front_errors_2d(front, L: float) -> dict:
     for key, data in (("koshizuka_oka", KOSHIZUKA_OKA), ("martin_moyce", MARTIN_MOYCE)):
         te = [d[0] for d in data if d[0] <= T[-1]]
         ze = [d[1] for d in data if d[0] <= T[-1]]
+        if not te:
+            out[key] = out[key + "_max_abs"] = float("nan")
+            continue
         zc = _interp(te, T, Z)
         num = sum((c - e) ** 2 for c, e in zip(zc, ze, strict=True))
         den = sum(e * e for e in ze)
@@ -366,10 +373,11 @@ def run_pysph(python, case, dx, t_end, sample, threads, wait_policy, timeout=720
 
 
 def run_ours(case, dx, t_end, sample, threads, R_over_dx, alpha, cfl, wait_policy,
-             timeout=7200) -> dict:
+             ours_threads, timeout=7200) -> dict:
     cmd = [sys.executable, os.path.abspath(__file__), "--ours-worker", "--case", case,
            "--dx", repr(dx), "--t-end", repr(t_end), "--sample", repr(sample),
-           "--R-over-dx", repr(R_over_dx), "--alpha", repr(alpha), "--cfl", repr(cfl)]
+           "--R-over-dx", repr(R_over_dx), "--alpha", repr(alpha), "--cfl", repr(cfl),
+           "--ours-threads", str(ours_threads)]
     env = {"NUMBA_NUM_THREADS": str(threads)}
     if wait_policy:  # numba's threading layer is OpenMP here too: the same policy
         env["OMP_WAIT_POLICY"] = wait_policy
@@ -394,27 +402,32 @@ def git_head() -> str:
 
 
 def summarise(runs) -> dict:
-    """min / median of the solve wall times per code, and the ratios."""
+    """Per label: min / median wall and CPU seconds; per sphfem label the ratios to PySPH
+    (wall time, steps, cost per step)."""
     out = {}
-    for code in ("pysph", "sphfem"):
-        w = [r["solve_s"] for r in runs if r["code"] == code]
-        if w:
-            out[code] = {"min_s": min(w), "median_s": statistics.median(w), "all_s": w}
-    if "pysph" in out and "sphfem" in out:
-        out["speedup_min"] = out["pysph"]["min_s"] / out["sphfem"]["min_s"]
-        out["speedup_median"] = out["pysph"]["median_s"] / out["sphfem"]["median_s"]
-        p = [r for r in runs if r["code"] == "pysph"][0]
-        o = [r for r in runs if r["code"] == "sphfem"][0]
-        out["steps_ratio"] = p["steps"] / o["steps"]
-        out["per_step_cost_ratio"] = ((out["pysph"]["min_s"] / p["steps"])
-                                      / (out["sphfem"]["min_s"] / o["steps"]))
+    for lab in dict.fromkeys(r["label"] for r in runs):
+        rs = [r for r in runs if r["label"] == lab]
+        w = [r["solve_s"] for r in rs]
+        c = [r["cpu_s"] for r in rs]
+        out[lab] = {"min_s": min(w), "median_s": statistics.median(w), "all_s": w,
+                    "cpu_min_s": min(c), "steps": rs[0]["steps"]}
+    p = out.get("pysph")
+    for lab, o in out.items():
+        if lab == "pysph" or p is None:
+            continue
+        o["speedup_min"] = p["min_s"] / o["min_s"]
+        o["speedup_median"] = p["median_s"] / o["median_s"]
+        o["speedup_cpu"] = p["cpu_min_s"] / o["cpu_min_s"]
+        o["steps_ratio"] = p["steps"] / o["steps"]
+        o["per_step_cost_ratio"] = o["speedup_min"] / o["steps_ratio"]
     return out
 
 
 def markdown(res) -> str:
     L = ["# Time to solution: sphfem vs PySPH dam-break examples\n",
          f"Generated by `benchmarks/pysph/time_to_solution.py` on {res['date']} (git "
-         f"`{res['git_head'][:12]}`), {res['threads']} threads per code, runs interleaved "
+         f"`{res['git_head'][:12]}`), {res['threads']} threads per code "
+         f"(OMP_WAIT_POLICY={res['omp_wait_policy'] or 'unset'}), runs interleaved "
          f"(PySPH, ours, ...).  Load average (1/5/15 min) at start {res['loadavg_start']}, "
          f"at end {res['loadavg_end']}.\n", f"Command: `{res['command']}`\n"]
     for case, cr in res["cases"].items():
@@ -426,12 +439,12 @@ def markdown(res) -> str:
             L.append("|---|---|---|---|---|---|---|---|---|---|---|")
         else:
             L.append("| code | round | particles (fluid / total) | wall s | CPU s | steps | "
-                     "mean dt [s] | front at x = 2.42 [s] | err vs Kleefsman P1 rise | "
+                     "mean dt [s] | front at the obstacle [s] | err vs Kleefsman P1 rise | "
                      "load start |")
             L.append("|---|---|---|---|---|---|---|---|---|---|")
         for r in cr["runs"]:
             e = r["front_error"]
-            head = (f"| {r['code']} | {r['round']} | {r['n_fluid']} / {r['n_total']} | "
+            head = (f"| {r['label']} | {r['round']} | {r['n_fluid']} / {r['n_total']} | "
                     f"{r['solve_s']:.1f} | {r['cpu_s']:.1f} | {r['steps']} | "
                     f"{r['dt_mean']:.3e} | ")
             if case == "2d":
@@ -443,18 +456,19 @@ def markdown(res) -> str:
                 er = ("-" if e["arrival_rel_err"] is None
                       else f"{100 * e['arrival_rel_err']:.1f} %")
                 L.append(head + f"{ta} | {er} | {r['loadavg_start']} |")
-        s = cr["summary"]
-        if "speedup_min" in s:
-            L.append(f"\nWall time PySPH / ours: **{s['speedup_min']:.2f}x** (minima "
-                     f"{s['pysph']['min_s']:.1f} / {s['sphfem']['min_s']:.1f} s), "
-                     f"{s['speedup_median']:.2f}x (medians); steps ratio PySPH / ours "
-                     f"{s['steps_ratio']:.2f}, cost per step PySPH / ours "
-                     f"{s['per_step_cost_ratio']:.2f}.\n")
-        o = [r for r in cr["runs"] if r["code"] == "sphfem"]
-        if o:
-            r = min(o, key=lambda r: r["solve_s"])
+        L.append("")
+        for lab, o in cr["summary"].items():
+            if "speedup_min" not in o:
+                continue
+            L.append(f"* PySPH / {lab}: wall **{o['speedup_min']:.2f}x** (minima), "
+                     f"{o['speedup_median']:.2f}x (medians), CPU seconds "
+                     f"{o['speedup_cpu']:.2f}x; steps ratio {o['steps_ratio']:.2f}, wall "
+                     f"cost per step ratio {o['per_step_cost_ratio']:.2f}.")
+        L.append("")
+        for lab in dict.fromkeys(r["label"] for r in cr["runs"] if r["code"] == "sphfem"):
+            r = min((r for r in cr["runs"] if r["label"] == lab), key=lambda r: r["solve_s"])
             w = r["wall_s"]
-            L.append("Ours, fastest run, where the stepping time goes (the fluid module's "
+            L.append(f"{lab}, fastest run, where the stepping time goes (the fluid module's "
                      "timers): " + ", ".join(f"{k} {v:.2f} s ({100 * v / r['solve_s']:.1f} %)"
                                              for k, v in w.items())
                      + f"; {r['neighbor_rebuilds']} list rebuilds in {r['steps']} steps "
@@ -474,10 +488,10 @@ def plot(res, path) -> None:
     for ax, case in zip(axes[0], cases, strict=True):
         cr = res["cases"][case]
         c = CASES[case]
-        for code, style in (("pysph", "-"), ("sphfem", "--")):
-            rs = [r for r in cr["runs"] if r["code"] == code]
-            if not rs:
-                continue
+        for lab in dict.fromkeys(r["label"] for r in cr["runs"]):
+            rs = [r for r in cr["runs"] if r["label"] == lab]
+            style = "-" if lab == "pysph" else "--"
+            code = lab
             f = rs[0]["front"]
             if case == "2d":
                 s = math.sqrt(2 * G / c["L"])
@@ -496,7 +510,8 @@ def plot(res, path) -> None:
         else:
             lo, hi = (T / math.sqrt(G / c["H"]) for T in KLEEFSMAN_P1_RISE)
             ax.axvspan(lo, hi, color="0.8", label="Kleefsman P1 pressure rise")
-            ax.axhline(c["obstacle_face"], color="k", lw=0.8, label="obstacle face")
+            ax.axhline(pysph_3d_boxes(cr["dx"])["obstacle"][0][0], color="k", lw=0.8,
+                       label="obstacle face")
             ax.set_xlabel("t [s]")
             ax.set_ylabel("front x [m]")
         ax.set_title(f"{c['example']}, dx = {cr['dx']:g}")
@@ -512,50 +527,71 @@ def main(argv=None):
     ap.add_argument("--ours-worker", action="store_true", help=argparse.SUPPRESS)
     ap.add_argument("--case", default="2d", choices=list(CASES), help=argparse.SUPPRESS)
     ap.add_argument("--cases", nargs="+", default=["2d"], choices=list(CASES))
-    ap.add_argument("--dx", type=float, default=None,
-                    help="spacing (default: the example's, 2D 0.03, 3D 0.02)")
-    ap.add_argument("--t-end", type=float, default=None,
-                    help="physical end time (default: the example's tf, 2D 2.5 s, 3D 6 s)")
+    ap.add_argument("--dx", nargs="+", default=[],
+                    help="spacing, CASE=DX or DX (default: the example's, 2D 0.03, 3D 0.02)")
+    ap.add_argument("--t-end", nargs="+", default=[],
+                    help="physical end time, CASE=T or T (default: the example's tf, 2D "
+                         "2.5 s, 3D 6 s)")
     ap.add_argument("--sample", type=float, default=0.005, help="front sample interval [s]")
-    ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--threads", type=int, default=2, help="threads of each code")
+    ap.add_argument("--ours-threads", type=int, default=None,
+                    help="FluidParams.threads of ours (default: --threads; 0: automatic, "
+                         "one thread below 20,000 particles)")
     ap.add_argument("--rounds", type=int, default=2)
     ap.add_argument("--R-over-dx", type=float, default=3.0)
     ap.add_argument("--alpha", type=float, default=0.02)
-    ap.add_argument("--cfl", type=float, default=0.25)
+    ap.add_argument("--cfl", type=float, nargs="+", default=[0.25],
+                    help="[time] cfl of ours; several: one sphfem variant each (the first "
+                         "is the recommended setting)")
     ap.add_argument("--pysph-python", default="/tmp/pysph-venv/bin/python")
     ap.add_argument("--omp-wait-policy", default="PASSIVE",
                     help="OMP_WAIT_POLICY of both codes' workers ('' = unset: GNU OpenMP's "
                          "spinning default, which collapses on a loaded machine)")
     ap.add_argument("--out", default=HERE)
     a = ap.parse_args(argv)
+    if a.ours_threads is None:
+        a.ours_threads = a.threads
+
+    def per_case(vals, case, key):
+        out = CASES[case][key]
+        for v in vals:
+            c, _, x = v.rpartition("=")
+            if c in ("", case):
+                out = float(x)
+        return out
+
     if a.pysph_worker or a.ours_worker:
-        a.dx = a.dx or CASES[a.case]["dx"]
-        a.t_end = a.t_end or CASES[a.case]["tf"]
+        a.dx = per_case(a.dx, a.case, "dx")
+        a.t_end = per_case(a.t_end, a.case, "tf")
+        a.cfl = a.cfl[0]
         r = pysph_worker(a) if a.pysph_worker else ours_worker(a)
         print(json.dumps(r), flush=True)
         return
 
     res = {"date": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
            "git_head": git_head(), "loadavg_start": loadavg(), "threads": a.threads,
+           "ours_threads": a.ours_threads, "omp_wait_policy": a.omp_wait_policy,
            "command": " ".join(["python"] + sys.argv), "cases": {}}
     for case in a.cases:
-        dx = a.dx or CASES[case]["dx"]
-        t_end = a.t_end or CASES[case]["tf"]
+        dx = per_case(a.dx, case, "dx")
+        t_end = per_case(a.t_end, case, "tf")
         runs = []
         for rnd in range(a.rounds):
-            for code in ("pysph", "sphfem"):
+            for code, cfl in [("pysph", None)] + [("sphfem", c) for c in a.cfl]:
                 if code == "pysph":
                     r = run_pysph(a.pysph_python, case, dx, t_end, a.sample, a.threads,
                                   a.omp_wait_policy)
+                    r["label"] = "pysph"
                 else:
                     r = run_ours(case, dx, t_end, a.sample, a.threads, a.R_over_dx,
-                                 a.alpha, a.cfl, a.omp_wait_policy)
+                                 a.alpha, cfl, a.omp_wait_policy, a.ours_threads)
+                    r["label"] = f"sphfem cfl={cfl:g}"
                 r["round"] = rnd
                 add_errors(r, case)
                 runs.append(r)
                 err = {k: v for k, v in r["front_error"].items()
                        if k in ("koshizuka_oka", "martin_moyce", "arrival_rel_err")}
-                print(f"[{case} r{rnd}] {code:6s} n={r['n_total']:>7} {r['solve_s']:8.1f} s "
+                print(f"[{case} r{rnd}] {r['label']:16s} n={r['n_total']:>7} {r['solve_s']:8.1f} s "
                       f"{r['steps']:>7} steps dt {r['dt_mean']:.3e} err {json.dumps(err)} "
                       f"load {r['loadavg_start']}", flush=True)
         res["cases"][case] = {"dx": dx, "t_end": t_end, "runs": runs,
