@@ -49,6 +49,9 @@ import sys
 import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+from run_pysph import loadavg  # noqa: E402  (no sphfem import: usable in the PySPH venv)
+
 G = 9.81
 
 #: Koshizuka & Oka (1996): Z = x/L against T = t sqrt(2 g / L), column L x 2L (PySPH's
@@ -68,14 +71,6 @@ CASES = {
     "2d": {"example": "dam_break_2d", "dx": 0.03, "tf": 2.5, "H": 2.0, "L": 1.0},
     "3d": {"example": "dam_break_3d", "dx": 0.02, "tf": 6.0, "H": 0.55, "L": 1.228},
 }
-
-
-def loadavg() -> str:
-    try:
-        with open("/proc/loadavg") as f:
-            return " ".join(f.read().split()[:3])
-    except OSError:
-        return "n/a"
 
 
 def _front_recorder(samples: list, every: float):
@@ -568,8 +563,11 @@ def main(argv=None):
         print(json.dumps(r), flush=True)
         return
 
+    from sphfem.machine import machine_info
+
     res = {"date": datetime.datetime.now(datetime.UTC).isoformat(timespec="seconds"),
-           "git_head": git_head(), "loadavg_start": loadavg(), "threads": a.threads,
+           "machine": machine_info(), "git_head": git_head(), "loadavg_start": loadavg(),
+           "threads": a.threads,
            "ours_threads": a.ours_threads, "omp_wait_policy": a.omp_wait_policy,
            "command": " ".join(["python"] + sys.argv), "cases": {}}
     for case in a.cases:
