@@ -33,6 +33,19 @@ experiments' sample times (relative L2).  3D (SPHERIC test 2, Kleefsman et al. 2
 time the front reaches the obstacle's face x = 2.42 m against the experiment's pressure
 rise at probe P1 on that face (T = t sqrt(g/H) = 1.575-1.672 in PySPH's digitised data).
 
+End times: PySPH's ``dam_break_2d`` (1.0b2, as shipped, OpenMP or serial build) ends in a
+segmentation fault at t ~ 0.94 s of its tf = 2.5 s here (its step falls from 1.8e-4 to
+~3e-5 s once the surge has hit the right wall at t ~ 0.71 s; the same crash at 36 % of tf
+is pypr/pysph issue 384), so the 2D comparison stops at t = 0.76 s (T = 3.37: every
+experimental point).  Its ``dam_break_3d`` takes hours to its tf = 6 s ("14 hours" in its
+docstring); the 3D comparison runs to a stated shorter time past the obstacle impact.
+
+Threads: ``--threads`` for both codes (``OMP_NUM_THREADS`` / ``NUMBA_NUM_THREADS``; ours
+also ``FluidParams.threads``, ``--ours-threads 0`` for the automatic choice).  Both
+OpenMP runtimes get ``OMP_WAIT_POLICY=PASSIVE`` by default: on this shared machine GNU
+OpenMP's spinning default made PySPH's 2-thread run 5-30x slower (threads spinning at
+barriers while their partner waits for a core), which would flatter us.
+
 Writes ``tts.json``, ``TIME_TO_SOLUTION.md`` and ``tts_front.png`` (``--out``).
 """
 
