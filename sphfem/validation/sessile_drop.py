@@ -68,6 +68,10 @@ R0/dx 20); Young's normals over the whole wall support instead of the first laye
 force sigma (cos theta_eq - cos theta_d) from the colour gradient at the line is biased the
 same way (90 / 120 / 150 deg caps: 75 / 79 / 97-102 deg, resolution-independent) and jumps
 with the lattice (60 deg caps: 44 deg at R0/dx 10, 63 at 20): not used.
+Kinetic damping (``damping`` = 0.05 capillary times, 24 capillary times): 60 deg -> 63.8 /
+67.0 deg final at R0/dx 10 / 20 (Young's normals on the first layer) and 63.7 / 64.4 deg (on
+the first two layers, WALL_LO, WALL_HI = 0, 0.25); 120 deg -> 110.9 / leaves the wall, and
+138 (still rising) / stop: a non-wetting drop does not stay on the wall.
 
 Akinci et al. (2013) with its adhesion (``run_sessile(..., method="akinci")``, delta = 0 and
 the SPH-pressure calibration of session 9): 60 / 120 deg prescribed gave 72.7 / 97.7 deg
