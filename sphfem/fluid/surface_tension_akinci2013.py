@@ -66,7 +66,8 @@ period was 0.973 / 1.013 / 1.048 T_Rayleigh at 10 / 20 / 30 dx under the continu
 calibration, which with delta = 0 gives 0.890 / 0.875 / 0.866 (a tension of 1.26-1.33 sigma;
 interior pressure 1.50 sigma / R_drop at 10 and 20 dx).  With the SPH-pressure calibration
 and delta = 0: 1.056 / 1.036 / 1.024 T_Rayleigh (2 periods), ripple <= 0.011 / 0.014 /
-0.023 dx, the last third no rougher than the first (tests/test_surface_tension_akinci_ripple.py).
+0.023 dx, the last third no rougher than the first (tests/test_surface_tension_akinci_ripple.py);
+3D droplet (R_drop = 8 dx, 1.6 periods, delta = 0): 1.019 T_Rayleigh (0.883 before).
 
 Wetting (Akinci's adhesion replaced by a construction with a Young relation for both terms):
 the wall carries the colour psi = (1 + cos theta) / 2, theta = ``akinci_contact_angle``
