@@ -28,7 +28,16 @@ Each figure gets an observed order, a Richardson limit and a GCI error bar
   a t << 1: the spreading flow holds the fluid layer thin, so the impact point warms above
   it (1.2x at a t = 1, 1.7x at a t = 4 for constant a); its ratio is reported;
 * conservation: heat lost by the fluid = heat gained by the substrate to 1e-9;
-* the maximum spreading is reached before the end (the run goes past it).
+* the maximum spreading is reached before the end (the run goes past it);
+* independent physics of the spreading, at the finest level: (a) the early contact
+  diameter against Wagner's law D_c / D = sqrt(6 t / t_c) (the wetted radius of a sphere
+  meeting a plane in potential flow, sqrt(3 R V t); Wagner 1932, Riboux & Josserand 2014),
+  its mean ratio over [0.1, 0.3] t_c after contact within 10 %; (b) D_max / D inside the
+  band of the published correlations (:func:`sphfem.fluid.spreading.correlation_table` at
+  the run's We and Re, contact angle 90 deg: Pasandideh-Fard 1996, Ukiwe & Kwok 2005, Clanet
+  2004, Roisman 2009, Laan 2014) widened by 10 % on each side (their own scatter).  The
+  lamella's thickness at maximum spreading in particles, 2 D / (3 beta^2 dx) (the droplet's
+  volume as a disc), is reported: below ~3 the spreading is decided below the spacing.
 
 Quick mode (``validate all --quick``, inside the test suite): 50 m/s only, D/dx = 16, 20,
 24 to 0.6 t_c: conservation and the contact temperature are gated, the Richardson figures
@@ -56,6 +65,11 @@ LEVELS_QUICK = (16, 20, 24)
 T_END_FULL, T_END_QUICK = 4.0, 0.6
 #: window of the impact-point temperature, in t_c after contact
 T_WINDOW = (0.1, 2.0)
+#: window of the early contact diameter against Wagner's law, in t_c after contact
+T_WAGNER = (0.1, 0.3)
+TOL_WAGNER = 0.10
+#: the correlations' band is widened by this fraction on each side
+TOL_CORRELATIONS = 0.10
 TOL_CONVERGED = 0.10
 TOL_CONTACT = 0.10
 TOL_BALANCE = 1e-9
@@ -107,6 +121,17 @@ def figures(summary: dict, speed: float, diameter: float) -> dict:
     strained = strained_reference(summary, t_contact, win)
     sp = fl["spreading"]
     mat = summary["scene"]["materials"][summary["scene"]["coupling"]["material"]]
+    wagner = [r / math.sqrt(6.0 * (t - t_contact) / tc)
+              for t, r in zip(sp["history_t_s"], sp["history_ratio"], strict=True)
+              if T_WAGNER[0] <= (t - t_contact) / tc <= T_WAGNER[1]]
+    fluid = next(b for b in summary["scene"]["blocks"] if b["kind"] == "fluid")
+    fmat = summary["scene"]["materials"][fluid["material"]]
+    from sphfem.fluid.spreading import correlation_table, reynolds, weber
+
+    We = weber(fmat["rho0"], speed, diameter, fmat["sigma"])
+    Re = reynolds(fmat["rho0"], speed, diameter, fmat["mu"])
+    band = list(correlation_table(We, Re, 90.0).values())
+    dx = float(fluid.get("dx") or summary["scene"]["sph"]["dx"])
     # a surface held at the ideal contact rise over a spot wider than the heated depth is in
     # equal biaxial constraint: s_rr = s_tt = -E alpha dT / (1 - nu), s_zz = 0, so its von
     # Mises stress is E alpha dT / (1 - nu) (the thermal plateau the peak approaches)
@@ -114,6 +139,9 @@ def figures(summary: dict, speed: float, diameter: float) -> dict:
     return {
         "vm_thermal": vm_thermal,
         "spread": sp["max_ratio"], "spread_t_tc": sp["max_t_s"] / tc,
+        "wagner_ratio": sum(wagner) / len(wagner) if wagner else math.nan,
+        "correlations": (min(band), max(band)), "We": We, "Re": Re,
+        "lamella_particles": 2.0 * diameter / (3.0 * sp["max_ratio"] ** 2 * dx),
         "heat": sh["heat_to_substrate_J"], "heat_ideal": sh["ideal_contact_heat_J"],
         "T_impact": sum(rises) / len(rises) if rises else math.nan,
         "T_impact_static": max((abs(r / ideal - 1.0) for r in rises), default=math.nan),
@@ -244,6 +272,23 @@ def droplet_impact(quick: bool) -> CaseResult:
             crit[f"{tag} spread max reached"] = Criterion(
                 f"{tag}: time of maximum spreading / end time (< 1: the run goes past it)",
                 fin["spread_t_tc"] * fin["tc"] / fin["t_end"], 0.98)
+        if not quick:
+            crit[f"{tag} Wagner"] = Criterion(
+                f"{tag}, D/dx={levels[-1]}: |mean contact diameter / Wagner's sqrt(6 t / t_c) "
+                f"- 1| over [{T_WAGNER[0]}, {T_WAGNER[1]}] t_c after contact",
+                abs(fin["wagner_ratio"] - 1.0), TOL_WAGNER)
+            lo, hi = fin["correlations"]
+            crit[f"{tag} correlations"] = Criterion(
+                f"{tag}, D/dx={levels[-1]}: distance of D_max/D = {fin['spread']:.2f} outside "
+                f"the correlations' band [{lo:.2f}, {hi:.2f}] (We {fin['We']:.0f}, Re "
+                f"{fin['Re']:.0f}), relative to the band's edge",
+                max(lo / fin["spread"] - 1.0, fin["spread"] / hi - 1.0, 0.0), TOL_CORRELATIONS)
+        notes.append(f"{tag}: lamella at maximum spreading, particles across (2 D / (3 beta^2 "
+                     "dx)): " + ", ".join(f"{f['lamella_particles']:.1f}" for f in figs)
+                     + "; contact diameter / Wagner over "
+                     f"[{T_WAGNER[0]}, {T_WAGNER[1]}] t_c: "
+                     + ", ".join(f"{f['wagner_ratio']:.3f}" for f in figs)
+                     + f" at D/dx = {list(levels)}")
         notes.append(f"{tag}: peak von Mises at D/dx={levels[-1]}: {fin['vm_peak'] / 1e6:.2f} "
                      f"MPa at {fin['vm_t_tc']:.2f} t_c after contact, r = "
                      f"{fin['vm_r_m'] * 1e6:.1f} um, z = {fin['vm_z_m'] * 1e6:.2f} um; heat "
