@@ -209,7 +209,7 @@ class AxisymmetricFluidModule(PhysicsModule):
     #: the records a resumed run continues (the spread history, the walls' impulse since
     #: t = 0, the deepest ring, the breach time; the solver state is in the particles)
     checkpoint_attrs = ("spread", "mom0", "impulse", "t0", "max_depth", "t_breach",
-                        "correction_impulse", "_next_spread", "spread_every")
+                        "correction_impulse", "_next_spread", "spread_every", "t_escape")
     moves_particles = False  # it moves the fluid, but with its own list (module docstring)
     #: a ring deeper than this [dx] below the wall top has entered the second wall layer:
     #: its time is reported (``t_wall_breach_s``); one below the wall stops the run
@@ -262,6 +262,8 @@ class AxisymmetricFluidModule(PhysicsModule):
         self.max_depth = -math.inf
         #: first time a fluid ring lay more than BREACH_DX below the wall top (None: never)
         self.t_breach = None
+        #: the first time a fluid ring was outside the domain box (None: never)
+        self.t_escape = None
 
     def fields(self):
         f = np.float64
@@ -302,6 +304,9 @@ class AxisymmetricFluidModule(PhysicsModule):
         walls = x[floor]
         self.dx = float(self.scene.sph.dx)
         self.wall_top = float(walls[:, 1].max()) + 0.5 * self.dx if len(walls) else None
+        #: the floor's outer radius [m] (the spread cannot be measured beyond it)
+        self._wall_r_max = (float(walls[:, 0].max()) + 0.5 * self.dx if len(walls)
+                            else math.inf)
         self.wall_depth = (float(walls[:, 1].max() - walls[:, 1].min()) / self.dx + 1.0
                            if len(walls) else None)
         self.D0 = 2.0 * max((b.radius for b in self.scene.blocks
@@ -373,6 +378,14 @@ class AxisymmetricFluidModule(PhysicsModule):
             raise SimulationStopped(f"axisymmetric fluid at t = {ctx.t + dt:.4g} s: a ring "
                                     f"went through the wall ({depth:.2f} dx below its top, "
                                     f"the wall is {self.wall_depth:.2f} dx thick)")
+        if self.t_escape is None:
+            lo, hi = self.scene.domain.lo, self.scene.domain.hi
+            xf = s.x[s.fluid]
+            if ((xf < np.asarray(lo)) | (xf > np.asarray(hi))).any():
+                self.t_escape = ctx.t + dt
+                logger.warning("axisymmetric fluid: a ring left the domain box at t = %g s "
+                               "(it flies on; counted in summary.json, fluid."
+                               "rings_outside_domain)", ctx.t + dt)
         self.impulse += dt * float(ctx.particles.f_fluid[:, 1].sum())
         if self.wall_top is not None and self.D0 > 0 and ctx.t + dt >= self._next_spread:
             self.spread.append([ctx.t + dt, self.contact_diameter(ctx.particles)])
@@ -465,6 +478,22 @@ class AxisymmetricFluidModule(PhysicsModule):
              "axial_momentum_residual_rel": self.momentum_residual(ps),
              "wall_s": dict(s.wall_s), "steps": s.step_count,
              "neighbor_lists": {"built": s.list_builds, "reused": s.list_reuses}}
+        # rings outside the domain box fly on (no outflow boundary): their number, mass
+        # fraction and the first time, so a splash that left the region is visible
+        lo, hi = np.asarray(self.scene.domain.lo), np.asarray(self.scene.domain.hi)
+        out = fl & ((ps.x < lo) | (ps.x > hi)).any(axis=1)
+        d["rings_outside_domain"] = {"count": int(out.sum()),
+                                     "mass_fraction": float(ps.m[out].sum() / ps.m[fl].sum()),
+                                     "t_first_s": self.t_escape}
+        d["wall_friction"] = {"model": s.wall_friction}
+        if s.wall_friction == "layer":
+            band = s.delta2 >= 0.0
+            d["wall_friction"].update(
+                rows_in_band=int(band.sum()),
+                factor_mean=float(s.fw[band].mean()) if band.any() else 1.0,
+                factor_max=float(s.fw[band].max()) if band.any() else 1.0,
+                shear_thickness_median_m=(float(np.sqrt(np.median(s.delta2[band])))
+                                          if band.any() else None))
         if self.D0 > 0 and len(sp):
             k = int(np.argmax(sp[:, 1]))
             d["spreading"] = {
@@ -472,6 +501,8 @@ class AxisymmetricFluidModule(PhysicsModule):
                 "1.5 dx of the wall reached from the axis without a gap over "
                 f"{self.FILM_GAP_DX:g} dx", "max_diameter_m": float(sp[k, 1]),
                 "max_ratio": float(sp[k, 1] / self.D0), "max_t_s": float(sp[k, 0]),
+                # the film reached the end of the wall: the spreading is cut by the scene
+                "wall_end_reached": bool(0.5 * sp[k, 1] >= self._wall_r_max - ctx.R),
                 "history_t_s": keep[:, 0].tolist(),
                 "history_ratio": (keep[:, 1] / self.D0).tolist()}
         return d

@@ -411,3 +411,27 @@ def test_spread_diameter_is_the_film_not_shed_rings():
     for x in (film, np.vstack([film, shed, above])):
         ps = SimpleNamespace(x=x, kind=np.full(len(x), FLUID))
         assert AxisymmetricFluidModule.contact_diameter(me, ps) == pytest.approx(21.0 * dx)
+
+
+def test_rings_leaving_the_domain_are_counted(tmp_path):
+    """A domain and a wall narrower than the splash: the rings that fly beyond the box are
+    counted (number, mass fraction, first time; they fly on, nothing stops the run) and the
+    spreading measured up to the end of the wall is flagged as cut by it."""
+    data = droplet_scene(t_end="0.5 tc")
+    data["domain"]["hi"][0] = 0.08e-3
+    data["blocks"][0]["hi"][0] = 0.08e-3
+    sim, s = run(data, tmp_path)
+    d = s["diagnostics"]["fluid"]
+    ps = sim.particles
+    fl = ps.kind == FLUID
+    out = fl & (ps.x[:, 0] > 0.08e-3)
+    assert out.sum() > 0
+    assert d["rings_outside_domain"]["count"] == int(out.sum())
+    assert d["rings_outside_domain"]["mass_fraction"] == pytest.approx(
+        ps.m[out].sum() / ps.m[fl].sum())
+    assert 0.0 < d["rings_outside_domain"]["t_first_s"] <= s["t"]
+    assert d["spreading"]["wall_end_reached"] is True
+    ok = run(droplet_scene(t_end="0.2 tc"), tmp_path / "wide")[1]["diagnostics"]["fluid"]
+    assert ok["rings_outside_domain"]["count"] == 0
+    assert ok["rings_outside_domain"]["t_first_s"] is None
+    assert ok["spreading"]["wall_end_reached"] is False
