@@ -75,6 +75,17 @@ def plug_traction_constant(kernel: str, support_factor: float, eps_visc: float =
 
 
 @njit(cache=True)
+def _pair_weight(x, Rp, i, j, kcode):
+    """Kernel shape f(d / R_ij) of the pair (0 beyond the pair support R_ij = (R_i + R_j) /
+    2)."""
+    r0 = x[j, 0] - x[i, 0]
+    r1 = x[j, 1] - x[i, 1]
+    R = 0.5 * (Rp[i] + Rp[j])
+    d = math.sqrt(r0 * r0 + r1 * r1)
+    return kernels.kernel_f(d / R, kcode) if d < R else 0.0
+
+
+@njit(cache=True)
 def band_normals(x, kind, offsets, indices, Rp, nrm, kcode, n_real, out_nrm, out_band):
     """For the real FLUID rows: ``out_band[i]`` = 1 when a wall row (kind WALL, or an axis
     mirror of one, kind > 1 with a nonzero normal) lies within the pair support, and
@@ -92,13 +103,7 @@ def band_normals(x, kind, offsets, indices, Rp, nrm, kcode, n_real, out_nrm, out
             j = indices[jj]
             if kind[j] == FLUID or (nrm[j, 0] == 0.0 and nrm[j, 1] == 0.0):
                 continue
-            r0 = x[j, 0] - x[i, 0]
-            r1 = x[j, 1] - x[i, 1]
-            R = 0.5 * (Rp[i] + Rp[j])
-            d = math.sqrt(r0 * r0 + r1 * r1)
-            if d >= R:
-                continue
-            w = kernels.kernel_f(d / R, kcode)
+            w = _pair_weight(x, Rp, i, j, kcode)
             s0 += w * nrm[j, 0]
             s1 += w * nrm[j, 1]
         nn = math.sqrt(s0 * s0 + s1 * s1)
@@ -142,13 +147,7 @@ def advance_layer(delta2, band, a, nu, dt, d2max, x, offsets, indices, Rp, kcode
                 j = indices[jj]
                 if j >= n or j == i or band[j] == 0 or delta2[j] < 0.0:
                     continue
-                r0 = x[j, 0] - x[i, 0]
-                r1 = x[j, 1] - x[i, 1]
-                R = 0.5 * (Rp[i] + Rp[j])
-                d = math.sqrt(r0 * r0 + r1 * r1)
-                if d >= R:
-                    continue
-                w = kernels.kernel_f(d / R, kcode)
+                w = _pair_weight(x, Rp, i, j, kcode)
                 sw += w
                 sd += w * delta2[j]
             new[i] = sd / sw if sw > 0.0 else 0.0
