@@ -63,6 +63,9 @@ class StepContext:
     out: Path | None = None
     nbrs: NeighborList | None = None
     nbrs_version: int = 0
+    #: the pair filter ``nbrs`` was built with (keep masks by kind, as
+    #: :func:`sphfem.neighbors.build_neighbor_list` takes them; None: all pairs)
+    pair_filter: tuple | None = None
     #: the driver's list service: ``provide(rebuild)`` makes ``nbrs`` valid for the
     #: current positions (rebuild=True: build anew now)
     provide: Callable[[bool], None] | None = field(default=None, repr=False)
