@@ -57,7 +57,8 @@ from sphfem.fem.substrate import FEMResult, FEMSubstrate
 logger = logging.getLogger(__name__)
 
 __all__ = ["AxisymmetricFEMSubstrate", "AxisymmetricResult", "axisymmetric_elasticity",
-           "axisymmetric_thermal_load", "axisymmetric_traction_load",
+           "axisymmetric_thermal_load", "axisymmetric_thermal_coupling",
+           "axisymmetric_traction_load",
            "axisymmetric_body_force_load", "axisymmetric_stress", "graded_tensor_rz",
            "substrate_rz", "per_radian", "FORCE_CONVENTIONS"]
 
@@ -113,6 +114,23 @@ def axisymmetric_thermal_load(lam: float, mu: float, alpha: float) -> LinearForm
     def form(v, w):
         r = w.x[0]
         return beta * w.dT * ((v.grad[0, 0] + v.grad[1, 1]) * r + v[0])
+
+    return form
+
+
+def axisymmetric_thermal_coupling(lam: float, mu: float, alpha: float) -> BilinearForm:
+    """The thermal load of :func:`axisymmetric_thermal_load` as a bilinear form of the
+    temperature change (trial function u, a scalar basis) and the displacement test
+    function v: ``int (3 lam + 2 mu) alpha u (e_rr + e_zz + e_tt)(v) r dr dz``.  Assembled
+    with ``assemble(scalar_basis, vector_basis)`` it is the matrix B of f = B dT for
+    nodal dT (the same integral as the linear form with dT interpolated at the
+    quadrature points; only the summation order differs)."""
+    beta = forms.thermal_modulus(lam, mu) * alpha
+
+    @BilinearForm
+    def form(u, v, w):
+        r = w.x[0]
+        return beta * u * ((v.grad[0, 0] + v.grad[1, 1]) * r + v[0])
 
     return form
 
@@ -241,10 +259,13 @@ class AxisymmetricResult(FEMResult):
 
     @property
     def stress_elem(self) -> np.ndarray:
-        """Volume average (weight r dr dz) of the stress per element, (nelems, 3, 3)."""
-        w = self.substrate.rdx
-        S = (self.stress_qp * w).sum(axis=-1) / w.sum(axis=-1)
-        return np.moveaxis(S, -1, 0)
+        """Volume average (weight r dr dz) of the stress per element, (nelems, 3, 3)
+        (cached)."""
+        if "stress_elem" not in self.__dict__:
+            w = self.substrate.rdx
+            S = (self.stress_qp * w).sum(axis=-1) / w.sum(axis=-1)
+            self.__dict__["stress_elem"] = np.moveaxis(S, -1, 0)
+        return self.__dict__["stress_elem"]
 
     @property
     def von_mises_elem(self) -> np.ndarray:
@@ -309,6 +330,7 @@ class AxisymmetricFEMSubstrate(FEMSubstrate):
         super().__init__(mesh, E, nu, alpha, T0=T0, element=element, clamps=clamps,
                          rollers=rollers, solver=solver, pin_rigid=pin_rigid,
                          nthreads=nthreads, direct_backend=direct_backend, intorder=intorder)
+        self._thermal_matrices: dict = {}  # thermal_load's B per dT basis
         self.r_qp = self.basis.global_coordinates()[0]  # (nelems, nqp)
         self.rdx = self.r_qp * self.basis.dx  # r-weighted quadrature weights
 
@@ -363,6 +385,27 @@ class AxisymmetricFEMSubstrate(FEMSubstrate):
         return TWO_PI * self.rdx.sum(axis=-1)
 
     # ------------------------------------------------------------------ loads
+    def thermal_load(self, dT) -> np.ndarray:
+        """Per-radian load vector of the thermal strain (:func:`axisymmetric_thermal_load`).
+        A vertex or scalar-dof array dT: f = B dT with B the matrix of
+        :func:`axisymmetric_thermal_coupling` on that basis, assembled once (one sparse
+        product per coupling step instead of a scikit-fem assembly: 21 ms -> < 1 ms on the
+        droplet job's 19k-dof mesh); a scalar or callable dT: the linear form."""
+        a = None if callable(dT) else np.asarray(dT, float)
+        if a is None or a.ndim != 1:
+            return super().thermal_load(dT)
+        if a.shape == (self.mesh.nvertices,):
+            kind, basis = "vertices", self.vbasis
+        elif a.shape == (self.sbasis.N,):
+            kind, basis = "scalar", self.sbasis
+        else:
+            return super().thermal_load(dT)  # raises the shape error
+        B = self._thermal_matrices.get(kind)
+        if B is None:
+            form = axisymmetric_thermal_coupling(self.lam, self.mu, self.alpha)
+            B = self._thermal_matrices[kind] = form.assemble(basis, self.basis).tocsr()
+        return B @ a
+
     def point_force_load(self, points, forces, snap: str | None = "top") -> np.ndarray:
         """Per-radian nodal loads f = P^T F_rad of point forces (n, 2) at points (n, 2) =
         (r, z), F_rad the forces per radian (:func:`per_radian` of ``force_convention``):

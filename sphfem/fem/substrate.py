@@ -202,10 +202,12 @@ class FEMResult:
 
     @property
     def stress_elem(self) -> np.ndarray:
-        """Volume-averaged Cauchy stress per element, (nelems, 3, 3)."""
-        dx = self.substrate.basis.dx
-        s = (self.stress_qp * dx).sum(axis=-1) / dx.sum(axis=-1)
-        return np.moveaxis(s, -1, 0)
+        """Volume-averaged Cauchy stress per element, (nelems, 3, 3) (cached)."""
+        if "stress_elem" not in self.__dict__:
+            dx = self.substrate.basis.dx
+            s = (self.stress_qp * dx).sum(axis=-1) / dx.sum(axis=-1)
+            self.__dict__["stress_elem"] = np.moveaxis(s, -1, 0)
+        return self.__dict__["stress_elem"]
 
     @property
     def stress_nodes(self) -> np.ndarray:
@@ -216,7 +218,11 @@ class FEMResult:
 
     @property
     def von_mises_nodes(self) -> np.ndarray:
-        return forms.von_mises(np.moveaxis(self.stress_nodes, 0, -1))
+        """Von Mises stress of :attr:`stress_nodes` (cached)."""
+        if "von_mises_nodes" not in self.__dict__:
+            self.__dict__["von_mises_nodes"] = forms.von_mises(
+                np.moveaxis(self.stress_nodes, 0, -1))
+        return self.__dict__["von_mises_nodes"]
 
     @property
     def von_mises_elem(self) -> np.ndarray:
@@ -712,26 +718,36 @@ class FEMSubstrate(QuasiStaticSubstrate):
     # ------------------------------------------------------------------ projection
     def project_tensor(self, Sq: np.ndarray) -> np.ndarray:
         """L2 projection of a (3, 3, nelems, nqp) quadrature field onto P1 vertex values,
-        (nvertices, 3, 3): M x = int s phi_j dx for the 6 components at once, M the P1 mass
-        matrix.  2D: M factorised once (a planar graph's factor stays sparse); 3D: conjugate
-        gradients (Jacobi preconditioned; M is well conditioned whatever the mesh size) to a
-        relative residual of 1e-12 in every component."""
+        (nvertices, 3, 3): M x = R s for the 6 components at once, M the P1 mass matrix
+        and R the matrix of the right-hand sides int s phi_j dx (both assembled once, R
+        from the quadrature weights phi_j dx of every element's points); components that
+        are zero at every quadrature point (the theta shears of an axisymmetric or
+        plane-strain stress) are zero, not solved for.  2D: M factorised once (a planar
+        graph's factor stays sparse); 3D: conjugate gradients (Jacobi preconditioned; M is
+        well conditioned whatever the mesh size) to a relative residual of 1e-12 in every
+        component."""
         vb = self.vbasis
         if self._mass is None:
             self._mass = forms.mass.assemble(vb).tocsr()
             self._mass_diag = self._mass.diagonal()
             self._mass_factor = factorize(self._mass, "splu") if self.dim == 2 else None
-            self._mass_weights = np.stack([np.asarray(vb.basis[k][0]) * vb.dx
-                                           for k in range(vb.Nbfun)])  # (nloc, nel, nqp)
+            w = np.stack([np.asarray(vb.basis[k][0]) * vb.dx
+                          for k in range(vb.Nbfun)])  # (nloc, nel, nqp)
+            cols = np.broadcast_to(np.arange(w[0].size).reshape(w[0].shape), w.shape)
+            rows = np.broadcast_to(vb.element_dofs[:, :, None], w.shape)
+            self._projection_rhs = sp.csr_matrix((w.ravel(), (rows.ravel(), cols.ravel())),
+                                                 shape=(vb.N, w[0].size))
         iu = np.triu_indices(3)
-        comps = np.asarray(Sq)[iu]  # (6, nelems, nqp)
-        vals = np.einsum("keq,ceq->kec", self._mass_weights, comps)  # (nloc, nel, 6)
-        rows = np.repeat(vb.element_dofs[:, :, None], 6, axis=2) * 6 + np.arange(6)
-        rhs = np.bincount(rows.ravel(), vals.ravel(), minlength=6 * vb.N).reshape(vb.N, 6)
-        if self._mass_factor is not None:
-            x = self._mass_factor.solve(rhs)
-        else:
-            x = _block_pcg(self._mass, rhs, self._mass_diag, rtol=1e-12, maxiter=500)
+        comps = np.asarray(Sq)[iu].reshape(6, -1)  # (6, nelems * nqp)
+        live = np.flatnonzero(np.any(comps != 0.0, axis=1))
+        x = np.zeros((vb.N, 6))
+        if live.size:
+            rhs = self._projection_rhs @ comps[live].T  # (N, live)
+            if self._mass_factor is not None:
+                x[:, live] = self._mass_factor.solve(rhs)
+            else:
+                x[:, live] = _block_pcg(self._mass, rhs, self._mass_diag, rtol=1e-12,
+                                        maxiter=500)
         out = np.empty((vb.N, 3, 3))
         out[:, iu[0], iu[1]] = x
         out[:, iu[1], iu[0]] = x
