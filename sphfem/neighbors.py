@@ -474,14 +474,6 @@ def _popcount(w):
     return np.int64((w * np.uint64(0x0101010101010101)) >> np.uint64(56))
 
 
-@njit(cache=True, inline="always")
-def _popcount(w):
-    w = w - ((w >> np.uint64(1)) & np.uint64(0x5555555555555555))
-    w = (w & np.uint64(0x3333333333333333)) + ((w >> np.uint64(2)) & np.uint64(0x3333333333333333))
-    w = (w + (w >> np.uint64(4))) & np.uint64(0x0F0F0F0F0F0F0F0F)
-    return np.int64((w * np.uint64(0x0101010101010101)) >> np.uint64(56))
-
-
 @njit(cache=True)
 def _chunks(cell_start, n):
     """Bounds of chunks of consecutive cells holding about equal numbers of particles
@@ -672,12 +664,16 @@ def build_neighbor_list(
     maxcand = int(ub.max())
     cand_start = np.zeros(ub.shape[0] + 1, dtype=np.int64)
     np.cumsum(ub, out=cand_start[1:])
-    cand = _scratch("cand", int(cand_start[-1]), np.int32)  # every cell's candidate ids
     cand_m = np.empty(ub.shape[0], dtype=np.int64)
     cand_asc = np.empty(ub.shape[0], dtype=np.bool_)
-    # hit bit masks of the mask pass, read by the fill pass (no second distance test)
+    # hit bit masks of the mask pass, read by the fill pass (no second distance test), and
+    # every cell's candidate ids: both in the thread's work buffer
     words = (maxcand + 63) // 64
-    bits = _scratch("bits", n * words, np.uint64).reshape(n, words)
+    nbits = n * words * 8
+    ncand = int(cand_start[-1])
+    work = work_buffer(nbits + 4 * ncand)
+    bits = work[:nbits].view(np.uint64).reshape(n, words)
+    cand = work[nbits:nbits + 4 * ncand].view(np.int32)
     kb, rmask = _kind_bits(order, *_pair_filter(kind, keep, n))
     counts = _mask_pass(xs, order32, kb, rmask, cell_start, g.ncell, g.reach, g.period, r2max,
                         maxcand, cand_start, cand, cand_m, cand_asc, bits)
@@ -708,15 +704,28 @@ def _kind_bits(order, kind, keep):
 _SCRATCH = threading.local()
 
 
-def _scratch(name, size, dtype):
-    """A work array of ``size`` elements, kept between builds of the same thread (these
-    are tens of MB: fresh ones cost their page faults at every build, which doubled the
-    first rebuilds of a fluid run)."""
-    buf = getattr(_SCRATCH, name, None)
-    if buf is None or buf.shape[0] < size:
-        buf = np.empty(size + size // 8, dtype=dtype)
-        setattr(_SCRATCH, name, buf)
-    return buf[:size]
+def work_buffer(nbytes: int) -> np.ndarray:
+    """The calling thread's work buffer: ``nbytes`` bytes (uint8, 8-byte aligned), kept
+    between calls and grown by 1/8 when too small.
+
+    Shared by work that never overlaps in time: :func:`build_neighbor_list` keeps its
+    candidate ids and hit masks here (4 B per stencil candidate of every cell, 1 bit per
+    particle and candidate of its cell: ~290 B per particle for the 3D dam break), and a
+    caller may keep per-evaluation data here between two builds (the fluid's compacted
+    rows, :meth:`sphfem.fluid.wcsph.FluidSolver.evaluate`).  Its contents are undefined
+    after the next call by anyone, so take a view, use it and drop it; never hold one
+    across a list build.  At 1e6 particles one buffer instead of two saves ~0.4 GB, and a
+    kept buffer spares the page faults of a fresh one at every build (which doubled the
+    first rebuilds of a fluid run).
+    """
+    nbytes = int(nbytes)
+    buf = getattr(_SCRATCH, "work", None)
+    if buf is None or buf.shape[0] < nbytes:
+        buf = None
+        _SCRATCH.work = None  # the old buffer goes before the new one is allocated
+        buf = np.empty((nbytes + nbytes // 8 + 7) // 8, dtype=np.uint64).view(np.uint8)
+        _SCRATCH.work = buf
+    return buf[:nbytes]
 
 
 def _pair_filter(kind, keep, n):

@@ -131,6 +131,11 @@ class Simulation:
                                scene.sph.kernel, self.lo, self.hi, self.period,
                                scene.materials, moving=self.moving,
                                provide=self._provide_neighbors)
+        # the list holds only the pairs its users read when they all name the same pair
+        # filter (``neighbor_filter``: keep masks by kind, None: all pairs): the fluid alone
+        # gets its view built by the search, without an unfiltered list and a filtered copy
+        filters = {getattr(m, "neighbor_filter", None) for m in self.modules}
+        self.ctx.pair_filter = filters.pop() if len(filters) == 1 else None
         self.steps_above_limit = 0
         self._earlier = None  # a resumed run: step, time and seconds before this process
         skin = scene.sph.skin
@@ -210,10 +215,17 @@ class Simulation:
     def update_neighbors(self) -> None:
         """Rebuild the neighbour list now (listing pairs within (1 + skin) R)."""
         t0 = time.perf_counter()
-        x = self.particles.x
+        p = self.particles
+        x = p.x
+        keep = self.ctx.pair_filter
+        self.ctx.nbrs = None  # the old list goes before the new one is built (peak memory)
         self.ctx.nbrs = build_neighbor_list(x, self.R * (1.0 + self.skin), self.lo,
-                                            self.hi, self.period)
-        self._x_at_build = x.copy()
+                                            self.hi, self.period,
+                                            kind=None if keep is None else p.kind, keep=keep)
+        if self._x_at_build is not None and self._x_at_build.shape == x.shape:
+            self._x_at_build[...] = x
+        else:
+            self._x_at_build = x.copy()
         self.rebuilds += 1
         self.ctx.nbrs_version += 1
         self.wall["neighbors"] += time.perf_counter() - t0

@@ -51,22 +51,30 @@ def test_compacted_rows_give_identical_forces(dim, delta, alpha):
     assert np.all(cnt <= np.diff(s.nbrs.offsets))
 
 
-def test_driven_fluid_leaves_the_shared_list_alone():
-    """Driven by a Simulation (fluid + heat on the shared list), the fluid's compaction and
-    filter write only fluid-owned buffers: sim.nbrs is unchanged by a step."""
+@pytest.mark.parametrize("modules", [("fluid", "heat"), ("fluid",)])
+def test_driven_fluid_leaves_the_shared_list_alone(modules):
+    """Driven by a Simulation, the fluid's compaction (and filter) write only work buffers:
+    sim.nbrs is unchanged by a step, on the shared list of fluid + heat (the fluid filters
+    a copy) and on the list built as the fluid's view (fluid alone: the list itself)."""
     from test_fluid_module import _scene
 
+    from sphfem import neighbors
+    from sphfem.fluid.passes import VIEW_KEEP
     from sphfem.simulation import Simulation
 
-    sim = Simulation(_scene(skin=0.5))
+    sim = Simulation(_scene(modules=modules, skin=0.5))
+    fl = sim.modules[0].solver
+    assert sim.ctx.pair_filter == (VIEW_KEEP if modules == ("fluid",) else None)
+    assert (fl.nbrs is sim.nbrs) == (modules == ("fluid",))
     sim.step(1.0e-5)
     nl = sim.nbrs
     off, idx, version = nl.offsets.copy(), nl.indices.copy(), sim.nbrs_version
     sim.step(1.0e-5)
     assert sim.nbrs_version == version  # no rebuild in between
     assert np.array_equal(sim.nbrs.offsets, off) and np.array_equal(sim.nbrs.indices, idx)
-    fl = sim.modules[0].solver
-    assert not np.shares_memory(fl._nb, sim.nbrs.indices)
+    work = neighbors._SCRATCH.work  # the compacted rows' buffer
+    assert not np.shares_memory(work, sim.nbrs.indices)
+    assert not np.shares_memory(work, fl.nbrs.indices)
 
 
 @pytest.mark.parametrize("dim,delta,alpha", [(2, 0.1, 0.02), (3, 0.1, 0.25)])

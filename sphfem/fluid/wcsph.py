@@ -61,7 +61,7 @@ from sphfem.fluid.guards import check_fluid
 from sphfem.fluid.scene_section import FLUID as FLUID_SECTION
 from sphfem.fluid.scene_section import REGISTRIES
 from sphfem.fluid.standalone import standalone_context
-from sphfem.neighbors import NeighborList
+from sphfem.neighbors import NeighborList, work_buffer
 from sphfem.particles import FLUID, WALL, ParticleSet
 from sphfem.physics import PhysicsModule, register_physics
 from sphfem.schema.params import check_declared, section_dataclass
@@ -141,6 +141,14 @@ FluidParams = section_dataclass(
     })
 
 
+def _is_fluid_view(ctx) -> bool:
+    """Whether the context's list was built as the fluid's view (pair filter
+    :data:`passes.VIEW_KEEP`: the driver when the fluid is the list's only user, or the
+    stand-alone context)."""
+    return (getattr(ctx, "fluid_view", False)
+            or getattr(ctx, "pair_filter", None) == passes.VIEW_KEEP)
+
+
 #: per-particle fields of the fluid (name -> (dtype, components or "dim"))
 FIELDS = {"v": "dim", "acc": "dim", "drho": 1, "p": 1, "mu": 1, "f_fluid": "dim"}
 #: added when the free surface is detected (1.0 on free-surface particles)
@@ -190,10 +198,14 @@ def _fluid_maxima(v, acc, rho, mu, kind):
 @dataclass
 class _Scratch:
     """Per-particle work arrays, recomputed at every force evaluation (never persistent
-    state, so a cell sort between evaluations does not need to permute them)."""
+    state, so a cell sort between evaluations does not need to permute them).  Those of
+    the free surface (``gc, nrm, lam, fs, near, shift``: 74 B per particle in 3D) exist
+    only with ``surface`` (``FluidParams.uses_free_surface``), ``mu0`` only once a
+    viscosity model with its own pass asks for it (:meth:`FluidSolver.evaluate`)."""
 
     n: int
     dim: int
+    surface: bool = True
     pr: np.ndarray = field(init=False)
     V: np.ndarray = field(init=False)
     meff: np.ndarray = field(init=False)
@@ -215,12 +227,15 @@ class _Scratch:
         n, d = self.n, self.dim
         self.pr, self.V, self.meff, self.isf = (np.zeros(n) for _ in range(4))
         self.vg, self.grad, self.v_n = (np.zeros((n, d)) for _ in range(3))
-        self.gc, self.nrm = np.zeros((n, d)), np.zeros((n, d))
-        self.rho_n, self.lam, self.shift = np.zeros(n), np.ones(n), np.zeros(n)
-        self.fs = np.zeros(n, dtype=np.int8)
-        self.near = np.zeros(n, dtype=np.bool_)
+        self.rho_n = np.zeros(n)
+        self.gc = self.nrm = self.lam = self.shift = self.fs = self.near = None
+        if self.surface:
+            self.gc, self.nrm = np.zeros((n, d)), np.zeros((n, d))
+            self.lam, self.shift = np.ones(n), np.zeros(n)
+            self.fs = np.zeros(n, dtype=np.int8)
+            self.near = np.zeros(n, dtype=np.bool_)
         self.P = np.zeros((n, passes.NPACK))
-        self.mu0 = np.zeros(n)  # the fused pass's mu when the viscosity model has its own
+        self.mu0 = None  # the fused pass's mu (zeros) when the viscosity model has its own
         self.cnt = np.zeros(n, dtype=np.int64)
         self.ok = np.ones(n, dtype=np.bool_)
 
@@ -238,10 +253,12 @@ class FluidSolver:
     driver's, when a :class:`~sphfem.simulation.Simulation` drives it).  After every drift
     it asks ``ctx.neighbors()`` for a list valid at the current positions and, whenever
     ``ctx.nbrs_version`` changed, derives its filtered view (:func:`passes.filter_rows`;
-    nothing to filter when the context says ``fluid_view``).  Without ``ctx`` the solver
-    builds the stand-alone one of :func:`sphfem.fluid.standalone.standalone_context` (its
-    own Verlet list of radius R (1 + skin), cell sort every ``sort_every`` builds) and
-    :meth:`run` is the stand-alone loop: one path of neighbours, forces and steps for both.
+    nothing to filter, and no copy kept, when the list was built as the fluid's view:
+    the context's ``pair_filter`` is :data:`passes.VIEW_KEEP`, or ``fluid_view``).
+    Without ``ctx`` the solver builds the stand-alone one of
+    :func:`sphfem.fluid.standalone.standalone_context` (its own Verlet list of radius
+    R (1 + skin), cell sort every ``sort_every`` builds) and :meth:`run` is the stand-alone
+    loop: one path of neighbours, forces and steps for both.
     """
 
     def __init__(self, particles: ParticleSet, R: float, lo, hi, period=None,
@@ -280,15 +297,13 @@ class FluidSolver:
         self.max_shift = 0.0
         self.t = 0.0
         self.step_count = 0
-        self.nbrs = None
+        self._view = None  # the filtered copy (None: the context's list is the view)
         self._nbrs_version = -1
         self.n_rebuilds = 0
         self.wall = {"neighbors": 0.0, "forces": 0.0, "integrate": 0.0, "guards": 0.0}
         self.last_fallbacks = 0
         self.guard_message = ""
         self._scratch = None
-        self._nb_buf = None
-        self._nb = None
         #: run the force pass over the in-range rows compacted by the density-gradient
         #: pass (False: over the full filtered Verlet list; same results, for tests)
         self.compact_rows = True
@@ -329,27 +344,30 @@ class FluidSolver:
     def list_radius(self) -> float:
         return self.R * (1.0 + self.params.skin)
 
-    def _set_view(self, nl: NeighborList) -> None:
-        """Filtered view of ``nl`` for the passes; (re)size the scratch arrays."""
-        m = nl.indices.shape[0]  # the work buffer: the compacted rows' (free until evaluate)
-        if self._nb_buf is None or self._nb_buf.shape[0] < m:
-            self._nb_buf = np.empty(m + m // 4, dtype=nl.indices.dtype)
-        off, idx = passes.filter_rows(nl.offsets, nl.indices, self.p.kind, self._nb_buf)
-        self._set_filtered(NeighborList(off, idx, nl.radius, nl.period))
+    @property
+    def nbrs(self) -> NeighborList | None:
+        """The fluid's view of the neighbour list: the context's list itself when it was
+        built with the fluid's pair filter (no reference of its own is kept, so the driver
+        can free the old list before building the next), else the filtered copy."""
+        if self._view is None and self._nbrs_version >= 0 and _is_fluid_view(self.ctx):
+            return self.ctx.nbrs
+        return self._view
 
-    def _set_filtered(self, nl: NeighborList) -> None:
-        """Take ``nl`` (already the fluid's filtered view) and size the work buffers: the
-        in-range rows that the density-gradient pass compacts at every evaluation go into
-        ``_nb`` (same shape as ``nl.indices``, grown with 25 % headroom, never the shared
-        list)."""
-        self.nbrs = nl
+    def _set_view(self, nl: NeighborList) -> None:
+        """Filtered view of ``nl`` for the passes (its work buffer: the thread's
+        :func:`~sphfem.neighbors.work_buffer`, free until :meth:`evaluate`)."""
         m = nl.indices.shape[0]
-        if self._nb_buf is None or self._nb_buf.shape[0] < m:
-            self._nb_buf = np.empty(m + m // 4, dtype=nl.indices.dtype)
-        self._nb = self._nb_buf[:m]
+        buf = work_buffer(m * nl.indices.itemsize).view(nl.indices.dtype)
+        self._view = None  # the old copy goes first
+        off, idx = passes.filter_rows(nl.offsets, nl.indices, self.p.kind, buf)
+        self._view = NeighborList(off, idx, nl.radius, nl.period)
+        self._new_list()
+
+    def _new_list(self) -> None:
+        """A new view: count it, (re)size the per-particle scratch arrays."""
         self.n_rebuilds += 1
         if self._scratch is None or self._scratch.n != self.p.n:
-            self._scratch = _Scratch(self.p.n, self.dim)
+            self._scratch = _Scratch(self.p.n, self.dim, self.params.uses_free_surface)
 
     def rebuild_neighbors(self) -> None:
         """Build the list anew now (through the context) and take its view."""
@@ -361,14 +379,15 @@ class FluidSolver:
         ctx = self.ctx
         if ctx.nbrs_version != self._nbrs_version or self.nbrs is None:
             t0 = time.perf_counter()
-            if getattr(ctx, "fluid_view", False):  # built as the fluid's view
-                self._set_filtered(ctx.nbrs)
+            if _is_fluid_view(ctx):  # built as the fluid's view: nothing to copy
+                self._view = None
+                self._new_list()
             else:
                 self._set_view(ctx.nbrs)
             self._nbrs_version = ctx.nbrs_version
             self.wall["neighbors"] += time.perf_counter() - t0
         elif self._scratch is None or self._scratch.n != self.p.n:
-            self._scratch = _Scratch(self.p.n, self.dim)
+            self._scratch = _Scratch(self.p.n, self.dim, self.params.uses_free_surface)
 
     def after_drift(self) -> None:
         """Make the list valid for the current (drifted) positions."""
@@ -410,7 +429,11 @@ class FluidSolver:
         # the delta-SPH term only feeds drho, which a projection method does not use (it sums
         # the density itself): no diffusive term, so no density gradient unless shifting needs it
         delta_coef = pa.delta * self.h * pa.c0 if eos else 0.0
-        nb, cnt = self._nb, s.cnt  # in-range rows (fluid-owned buffer, shared list untouched)
+        # in-range rows: the thread's work buffer (free between two list builds; the list
+        # itself is left untouched), a view dropped at the end of the evaluation
+        m = nl.indices.shape[0]
+        nb = work_buffer(m * nl.indices.itemsize).view(nl.indices.dtype)
+        cnt = s.cnt
         if delta_coef > 0 or pa.shifting != "none":
             passes.density_gradient(p.x, p.rho, s.V, p.kind, nl.offsets, nl.indices, self.R,
                                     self.sigma, self.kernel_code, self.period, pa.cond_max, s.grad,
@@ -421,7 +444,12 @@ class FluidSolver:
                                 cnt)
         if not self.compact_rows:  # reference path: the full view (tests, profiling)
             nb, cnt = nl.indices, np.diff(nl.offsets)
-        fused_mu = p.mu if self.visc_method is None or self.visc_method.fused else s.mu0
+        if self.visc_method is None or self.visc_method.fused:
+            fused_mu = p.mu
+        else:  # the model's own pass adds the viscous term: none in the fused pass
+            if s.mu0 is None:
+                s.mu0 = np.zeros(p.n)
+            fused_mu = s.mu0
         passes.pack_rows(p.x, p.v, s.vg, p.rho, s.pr, s.V, s.meff, s.isf, fused_mu, s.grad,
                          s.P)
         passes.fluid_forces(s.P, p.kind, nl.offsets, cnt, nb, self.R, self.sigma,
@@ -612,6 +640,9 @@ class FluidModule(PhysicsModule):
 
     name = "fluid"
     moves_particles = True
+    #: the pairs the fluid reads (its view): when no other module reads the list, the
+    #: driver builds it with this filter (:class:`~sphfem.simulation.Simulation`)
+    neighbor_filter = passes.VIEW_KEEP
 
     def __init__(self, scene):
         super().__init__(scene)
