@@ -407,14 +407,6 @@ def obstacle_front_3d(dx: float) -> float:
     return pysph_3d_boxes(dx)["obstacle"][0][0] - 0.5 * dx
 
 
-def git_head() -> str:
-    try:
-        return subprocess.run(["git", "rev-parse", "HEAD"], capture_output=True, text=True,
-                              cwd=HERE).stdout.strip()
-    except OSError:
-        return ""
-
-
 def summarise(runs) -> dict:
     """Per label: min / median wall and CPU seconds; per sphfem label the ratios to PySPH
     (wall time, steps, cost per step)."""
@@ -592,6 +584,8 @@ def main(argv=None):
         r = pysph_worker(a) if a.pysph_worker else ours_worker(a)
         print(json.dumps(r), flush=True)
         return
+
+    from compare import git_head  # the driver only: compare imports sphfem and numba
 
     from sphfem.machine import machine_info
 
