@@ -8,7 +8,10 @@ compare two runs' results bit for bit.
         seconds per module, numba threads and the load average before and after.
     python benchmarks/axisymmetric_droplet.py compare A B
         summary.json (timings left out), the coupling's history.json and probes.csv, and
-        every particle and substrate VTU of runs A and B: the differences, if any.
+        every particle and substrate VTU of runs A and B: the differences, if any, then
+        the largest relative changes per group: each figure of summary.json and of
+        history.json (list entries pooled: a history figure over all records) and each
+        VTU array (over all files) as max |a - b| / max |a|.
 
 Threads: NUMBA_NUM_THREADS; to time code of another commit, run from a ``git archive`` copy
 with PYTHONPATH pointing at it (benchmarks/README.md, "Axisymmetric droplet job").
@@ -72,6 +75,59 @@ def _walk(a, b, path, out):
         out.append(f"{path}: {a!r} vs {b!r}")
 
 
+def _numbers(a, b, path, out):
+    """Every pair of numbers at the same place of two JSON trees (timing keys left out)
+    into ``out`` {path with list indices as [*]: [(a, b), ...]}."""
+    if isinstance(a, dict) and isinstance(b, dict):
+        for k in set(a) & set(b) - TIMING_KEYS:
+            _numbers(a[k], b[k], f"{path}/{k}", out)
+    elif isinstance(a, list) and isinstance(b, list) and len(a) == len(b):
+        for x, y in zip(a, b, strict=True):
+            _numbers(x, y, f"{path}[*]", out)
+    elif (isinstance(a, (int, float)) and isinstance(b, (int, float))
+          and not isinstance(a, bool)):
+        out.setdefault(path, []).append((a, b))
+
+
+def relative_changes(A: Path, B: Path) -> dict:
+    """The relative changes of run B against run A ([``compare``'s help): {group: [(change,
+    quantity), ...] largest first}; a quantity is a JSON number's path with list indices as
+    [*] (its scale: the largest |a| over its entries: a history's figure over all records)
+    or a VTU array's name (its scale: the largest |a| over all files of the group)."""
+    import meshio
+    import numpy as np
+
+    out = {}
+    for name, f in (("summary", "summary.json"), ("history", "substrate/history.json")):
+        if (A / f).exists() and (B / f).exists():
+            pairs: dict = {}
+            _numbers(json.loads((A / f).read_text()), json.loads((B / f).read_text()),
+                     name, pairs)
+            rows = []
+            for k, v in pairs.items():
+                x = np.array(v, float)
+                scale = float(np.abs(x[:, 0]).max())
+                if scale > 0:
+                    rows.append((float(np.abs(x[:, 0] - x[:, 1]).max()) / scale, k))
+            out[name] = sorted(rows, reverse=True)
+    for group, files in (("particles", sorted(A.glob("particles_*.vtu"))),
+                         ("substrate", sorted((A / "substrate").glob("substrate_*.vtu")))):
+        diff: dict = {}
+        scale: dict = {}
+        for f in files:
+            ma, mb = meshio.read(f), meshio.read(B / f.relative_to(A))
+            arrays = [("points", ma.points, mb.points)] + [
+                (k, ma.point_data[k], mb.point_data[k]) for k in ma.point_data
+                if k in mb.point_data]
+            for k, x, y in arrays:
+                if x.size and x.shape == y.shape:
+                    diff[k] = max(diff.get(k, 0.0), float(np.abs(x - y).max()))
+                    scale[k] = max(scale.get(k, 0.0), float(np.abs(x).max()))
+        out[group] = sorted(((diff[k] / scale[k], k) for k in diff if scale[k] > 0),
+                            reverse=True)
+    return out
+
+
 def compare(A: Path, B: Path) -> list[str]:
     import meshio
     import numpy as np
@@ -101,6 +157,10 @@ if __name__ == "__main__":
         diffs = compare(Path(sys.argv[2]), Path(sys.argv[3]))
         print(f"{len(diffs)} differences")
         print("\n".join(diffs[:50]))
+        if diffs:
+            for g, rows in relative_changes(Path(sys.argv[2]), Path(sys.argv[3])).items():
+                print(f"largest relative changes, {g}: " + ", ".join(
+                    f"{k} {rel:.2g}" for rel, k in rows[:4]))
         sys.exit(1 if diffs else 0)
     else:
         sys.exit(__doc__)
