@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import csv
 import io
+import json
 import logging
 import math
 import time
@@ -112,6 +113,8 @@ class CouplingDriver:
         self.thermal = None
         #: wall time of the last history write, and the folder of records not yet written
         self._flushed, self._dirty = -math.inf, None
+        #: (record, its history.json text, its probes.csv line) of the records written
+        self._texts: list[tuple[dict, str, str]] = []
 
     def maybe_couple(self, ps, t: float, step: int, last: bool = False, folder=None):
         """Couple when ``step`` is a multiple of ``every_k`` or ``last``; return the record."""
@@ -182,22 +185,53 @@ class CouplingDriver:
         return rec
 
     # -- outputs -----------------------------------------------------------------------
-    def csv_text(self) -> str:
+    @staticmethod
+    def _csv_line(row) -> str:
         buf = io.StringIO()
-        w = csv.writer(buf)
-        npb = 0 if self.probes is None else len(self.probes)
-        head = ["t", "step", "peak_von_mises"] + [f"mean_s{c}" for c, _, _ in _COMPONENTS]
-        for k in range(npb):
-            head += [f"p{k}_s{c}" for c, _, _ in _COMPONENTS] + [f"p{k}_von_mises", f"p{k}_T"]
-        w.writerow(head)
-        for h in self.history:
+        csv.writer(buf).writerow(row)
+        return buf.getvalue()
+
+    def _record_texts(self) -> list[tuple[dict, str, str]]:
+        """Each record's history.json text (``json.dumps(_plain(rec), indent=2)`` indented
+        to its depth in the file) and probes.csv line, made once per record: rewriting the
+        files made every record again at every write, a cost quadratic in the number of
+        solves.  Records are recognised by identity (a restored history is new)."""
+        from sphfem.output import _plain
+
+        n = 0
+        for (rec, _, _), h in zip(self._texts, self.history, strict=False):
+            if rec is not h:
+                break
+            n += 1
+        del self._texts[n:]
+        for h in self.history[n:]:
+            text = json.dumps(_plain(h), indent=2, allow_nan=False).replace("\n", "\n    ")
             row = [repr(h["t"]), h["step"], repr(h["peak_von_mises"])]
             row += [repr(h["mean_stress"][c]) for c, _, _ in _COMPONENTS]
             for p in h.get("probes", []):
                 row += [repr(p[c]) for c, _, _ in _COMPONENTS] + [repr(p["von_mises"]),
                                                                  repr(p["T"])]
-            w.writerow(row)
-        return buf.getvalue()
+            self._texts.append((h, text, self._csv_line(row)))
+        return self._texts
+
+    def csv_text(self) -> str:
+        npb = 0 if self.probes is None else len(self.probes)
+        head = ["t", "step", "peak_von_mises"] + [f"mean_s{c}" for c, _, _ in _COMPONENTS]
+        for k in range(npb):
+            head += [f"p{k}_s{c}" for c, _, _ in _COMPONENTS] + [f"p{k}_von_mises", f"p{k}_T"]
+        return self._csv_line(head) + "".join(c for _, _, c in self._record_texts())
+
+    def history_text(self) -> str:
+        """history.json: the bytes of ``write_json`` of {"probes", "every_k_steps",
+        "history"}, the records' texts cached (:meth:`_record_texts`)."""
+        from sphfem.output import _plain
+
+        head = json.dumps(_plain({"probes": None if self.probes is None
+                                  else self.probes.tolist(), "every_k_steps": self.every_k}),
+                          indent=2, allow_nan=False)
+        texts = [t for _, t, _ in self._record_texts()]
+        body = "[\n    " + ",\n    ".join(texts) + "\n  ]" if texts else "[]"
+        return head[:-2] + ',\n  "history": ' + body + "\n}"
 
     def flush(self) -> None:
         """Write the records not yet written (see :meth:`couple`)."""
@@ -205,15 +239,13 @@ class CouplingDriver:
             self.write_history(self._dirty)
 
     def write_history(self, folder) -> None:
-        from sphfem.output import atomic_write_text, write_json
+        from sphfem.output import atomic_write_text
 
         self._flushed, self._dirty = time.perf_counter(), None
         folder = Path(folder)
         folder.mkdir(parents=True, exist_ok=True)
         atomic_write_text(folder / "probes.csv", self.csv_text())
-        write_json(folder / "history.json", {
-            "probes": None if self.probes is None else self.probes.tolist(),
-            "every_k_steps": self.every_k, "history": self.history})
+        atomic_write_text(folder / "history.json", self.history_text())
 
     def summary(self) -> dict:
         out = {"every_k_steps": self.every_k, "solves": len(self.history),
