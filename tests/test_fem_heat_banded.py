@@ -14,6 +14,7 @@ from sphfem.fem.heat_transient import (
     TransientHeat,
     band_order,
     graded_mesh,
+    lower_band,
 )
 
 K, RHO, C = 10.0, 3950.0, 900.0  # alumina of the droplet scene
@@ -37,11 +38,13 @@ def test_banded_cholesky_solves_as_spsolve():
     perm, w = band_order(A)
     assert w == th.bandwidth <= BAND_MAX
     b = np.random.default_rng(0).normal(size=A.shape[0])
-    x = BandedCholesky(A, perm, w).solve(b)
+    x = BandedCholesky(lower_band(A, perm, w), perm).solve(b)
     y = spsolve(A.tocsc(), b)
     assert np.abs(x - y).max() < 1e-13 * np.abs(y).max()
     with pytest.raises(np.linalg.LinAlgError):
-        BandedCholesky(-A, perm, w)
+        BandedCholesky(lower_band(-A, perm, w), perm)
+    with pytest.raises(ValueError, match="half-bandwidth"):
+        lower_band(A, perm, w - 1)
 
 
 @pytest.mark.parametrize("dirichlet", [None, {"bottom": T0}])

@@ -32,8 +32,10 @@ increment is off by the factor (C/dt + H)/(C/dt + H0), so the lag is bounded by
 factorised once per (theta, dt, H0) and re-used: by a banded Cholesky factorisation
 (LAPACK dpbtrf) in the reverse Cuthill-McKee order when that order's half-bandwidth is at
 most ``BAND_MAX`` (the tensor grids of :func:`graded_mesh` in 2D: the depth's node count,
-~20; n w^2 flops, 4-6x faster than SuperLU on the droplet job's 8.5k-node heat mesh), or
-else by SuperLU (symmetric-mode minimum-degree ordering);
+~20; n w^2 flops; the bands of M and K are taken once, so a new (theta, dt, H0) costs a
+band sum and dpbtrf: 3.6-5.6 CPU-ms per step against 20 with SuperLU on the droplet
+job's 8.5k-node heat mesh, w = 22), or else by SuperLU (symmetric-mode minimum-degree
+ordering);
 :class:`TransientHeat` sets H0 = H (a new factorisation) only when some node has
 |H - H0| > ``robin_tol`` (C/dt + H0), or H = 0 < H0 (a node that stopped exchanging
 must take in nothing), see :meth:`step`.
@@ -151,22 +153,27 @@ def band_order(A) -> tuple[np.ndarray, int]:
     return np.asarray(perm, np.int64), w
 
 
+def lower_band(A, perm: np.ndarray, w: int) -> np.ndarray:
+    """The lower band (w + 1, n) of the symmetric sparse matrix ``A`` in the order
+    ``perm``, LAPACK's storage: ab[i - j, j] = A[perm[i], perm[j]] for 0 <= i - j <= w."""
+    P = sp.csr_matrix(A)[perm][:, perm].tocoo()
+    low = P.row >= P.col
+    if P.nnz and int(np.max(P.row[low] - P.col[low])) > w:
+        raise ValueError(f"lower_band: the matrix reaches beyond the half-bandwidth {w}")
+    ab = np.zeros((w + 1, A.shape[0]))
+    ab[P.row[low] - P.col[low], P.col[low]] = P.data[low]
+    return ab
+
+
 class BandedCholesky:
-    """A = L L^T of a symmetric positive definite sparse matrix in the order ``perm``
-    with half-bandwidth ``w`` (:func:`band_order`): LAPACK dpbtrf on the lower band
+    """A = L L^T of a symmetric positive definite matrix given by its lower band ``ab``
+    (:func:`lower_band`) in the order ``perm`` (:func:`band_order`): LAPACK dpbtrf
     (n (w + 1) storage, ~n w^2 flops), ``solve`` by dpbtrs.  Raises
     ``np.linalg.LinAlgError`` when A is not positive definite."""
 
-    def __init__(self, A, perm: np.ndarray, w: int):
+    def __init__(self, ab: np.ndarray, perm: np.ndarray):
         from scipy.linalg.lapack import dpbtrf
 
-        P = sp.csr_matrix(A)[perm][:, perm].tocoo()
-        low = P.row >= P.col
-        n = A.shape[0]
-        if P.nnz and int(np.max(P.row[low] - P.col[low])) > w:
-            raise ValueError(f"BandedCholesky: the matrix reaches beyond the half-bandwidth {w}")
-        ab = np.zeros((w + 1, n))
-        ab[P.row[low] - P.col[low], P.col[low]] = P.data[low]
         self.cb, info = dpbtrf(ab, lower=1)
         if info != 0:
             raise np.linalg.LinAlgError(f"BandedCholesky: matrix not positive definite "
@@ -281,6 +288,9 @@ class TransientHeat:
             factor = "banded" if w <= BAND_MAX else "splu"
         #: "banded" (:class:`BandedCholesky`) or "splu"; ``bandwidth`` its RCM half-bandwidth
         self.factor, self.bandwidth, self._perm = factor, w, perm
+        self._bands = None
+        self._MID = self.M[self.I][:, self.D]
+        self._KID = self.K[self.I][:, self.D]
         self.H0 = np.zeros(self.surface_dofs.size)
         self._h0_key = 0
         self.heat_in = 0.0         #: sum of F dt over the steps [J] (eq. 2)
@@ -326,21 +336,37 @@ class TransientHeat:
         key = (theta, dt, self._h0_key)
         lu = self._lu.get(key)
         if lu is None:
-            s, n = self.surface_dofs, self.basis.N
-            A = (self.M / dt + theta * self.K
-                 + sp.csr_matrix((self.H0, (s, s)), shape=(n, n))).tocsr()
             if len(self._lu) >= 4:
                 self._lu.pop(next(iter(self._lu)))
-            AID = A[self.I][:, self.D] if self.D.size else None
-            AII = A[self.I][:, self.I]
-            if self.factor == "banded":
-                lu = (BandedCholesky(AII, self._perm, self.bandwidth), AID)
+            # A = M/dt + theta K + H0 (H0 on the surface diagonal, no dof of D): its
+            # I x D block is M_ID/dt + theta K_ID
+            AID = self._MID / dt + theta * self._KID if self.D.size else None
+            if self.factor == "banded":  # the bands of M and K taken once (_band_parts)
+                bM, bK, diag_s = self._band_parts()
+                ab = bM / dt + theta * bK
+                ab[0, diag_s] += self.H0
+                lu = (BandedCholesky(ab, self._perm), AID)
             else:
-                lu = (splu(AII.tocsc(), permc_spec="MMD_AT_PLUS_A",
+                s, n = self.surface_dofs, self.basis.N
+                A = (self.M / dt + theta * self.K
+                     + sp.csr_matrix((self.H0, (s, s)), shape=(n, n))).tocsr()
+                lu = (splu(A[self.I][:, self.I].tocsc(), permc_spec="MMD_AT_PLUS_A",
                            options={"SymmetricMode": True}), AID)
             self._lu[key] = lu
             self.factorisations += 1
         return lu
+
+    def _band_parts(self):
+        """(band of M_II, band of K_II, band column of each surface dof's diagonal) in the
+        order ``_perm``, made on first use."""
+        if self._bands is None:
+            MII, KII = self.M[self.I][:, self.I], self.K[self.I][:, self.I]
+            where = np.empty(self.I.size, np.int64)
+            where[self._perm] = np.arange(self.I.size)
+            self._bands = (lower_band(MII, self._perm, self.bandwidth),
+                           lower_band(KII, self._perm, self.bandwidth),
+                           where[np.searchsorted(self.I, self.surface_dofs)])
+        return self._bands
 
     def _set_h0(self, H) -> None:
         self.H0 = np.array(H, float)
