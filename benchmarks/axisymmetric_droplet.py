@@ -4,8 +4,11 @@ compare two runs' results bit for bit.
     python benchmarks/axisymmetric_droplet.py run V N TEND OUT
         the scene of sphfem.validation.droplet_impact.scene_at(V, N, TEND) (V m/s, D/dx = N,
         to TEND t_c) run into OUT; prints and writes OUT/bench.json: steps, particles, the
-        stepping loop's wall and process-CPU seconds, s/step, particle-steps/s, wall
-        seconds per module, numba threads and the load average before and after.
+        stepping loop's wall and process-CPU seconds, s/step, particle-steps/s, wall and
+        process-CPU seconds per module and of the coupling's parts (``_cpu_probes``), the
+        coupling's CPU share, the CPU of one stress / heat re-solve as a fraction of the
+        SPH (fluid + heat) CPU between two coupling steps, numba threads and the load
+        average before and after.
     python benchmarks/axisymmetric_droplet.py compare A B
         summary.json (timings left out), the coupling's history.json and probes.csv, and
         every particle and substrate VTU of runs A and B: the differences, if any, then
@@ -43,6 +46,7 @@ def run(V: float, N: int, t_end_tc: float, out: Path) -> dict:
     scene = parse_scene(di.scene_at(V, N, t_end_tc), source="benchmarks/axisymmetric_droplet")
     prepare_output_dir(out, overwrite=True)
     sim = Simulation(scene, source="benchmarks/axisymmetric_droplet")
+    cpu = _cpu_probes(sim)
     load0 = os.getloadavg()
     w0, c0 = time.perf_counter(), time.process_time()
     s = sim.run(out, progress=False)
@@ -55,8 +59,61 @@ def run(V: float, N: int, t_end_tc: float, out: Path) -> dict:
            "particle_steps_per_s": n * steps / s["wall_s"],
            "per_module_s": s["wall_s_per_module"], "setup_s": s["setup_s"],
            "load_before": load0, "load_after": os.getloadavg()}
+    modules = {m.name: cpu.get(m.name, 0.0) for m in sim.modules}
+    if "coupling.stress.backend" in cpu:
+        cpu["coupling.stress.recovery"] = cpu["coupling.stress.backend"] - cpu["stress.resolve"]
+    rec["per_module_cpu_s"] = modules
+    rec["coupling_cpu_s"] = {k: v for k, v in cpu.items() if k not in modules
+                             and k[:-6] not in modules}
+    solves = s["diagnostics"]["coupling"]["solves"]
+    sph = modules.get("fluid", 0.0) + modules.get("heat", 0.0)
+    if solves > 1 and sph > 0:
+        per = sph / (solves - 1)  # the SPH work between two coupling steps
+        rec["sph_cpu_s_between_couplings"] = per
+        rec["coupling_share_cpu"] = modules.get("coupling", 0.0) / sum(modules.values())
+        for k in ("stress.resolve", "heat.resolve"):
+            if k in cpu:
+                rec[f"{k}_fraction_of_sph"] = cpu[k] / cpu[k + "_calls"] / per
     (out / "bench.json").write_text(json.dumps(rec, indent=1))
     return rec
+
+
+def _cpu_probes(sim) -> dict:
+    """Process-CPU seconds [s] of each physics module's step and of the coupling's parts,
+    accumulated into the returned dict while ``sim`` runs (instance methods wrapped; the
+    arithmetic is untouched): ``stress.resolve`` the substrate's solve (load vector and
+    back-substitution), ``stress.recovery`` the backend's solve less that (stresses at
+    the quadrature points, nodal projection, element averages), ``heat.exchange`` the
+    contact interface with ``heat.resolve`` its FEM heat step inside, ``records`` the VTU
+    and history writes; ``<part>_calls`` the calls."""
+    cpu: dict = {}
+
+    def wrap(obj, name, key):
+        f = getattr(obj, name)
+
+        def timed(*a, **k):
+            t0 = time.process_time()
+            try:
+                return f(*a, **k)
+            finally:
+                cpu[key] = cpu.get(key, 0.0) + time.process_time() - t0
+                cpu[key + "_calls"] = cpu.get(key + "_calls", 0) + 1
+
+        setattr(obj, name, timed)
+
+    for mod in sim.modules:
+        wrap(mod, "step", mod.name)
+        drv = getattr(mod, "driver", None)
+        if drv is None:
+            continue
+        wrap(drv.backend, "solve", "coupling.stress.backend")
+        wrap(drv.backend.sub, "solve", "stress.resolve")
+        wrap(drv.backend, "write", "coupling.records")
+        wrap(drv, "write_history", "coupling.records")
+        if drv.thermal is not None:
+            wrap(drv.thermal, "exchange", "coupling.heat.exchange")
+            wrap(drv.thermal.heat, "step", "heat.resolve")
+    return cpu
 
 
 def _walk(a, b, path, out):
