@@ -68,3 +68,14 @@ def test_projection_against_scikit_fem_and_zero_components():
     # cached on the result: the same arrays on every query
     assert res.stress_elem is res.stress_elem
     assert res.von_mises_nodes is res.von_mises_nodes
+
+
+def test_element_averages_over_the_nonzero_components():
+    """stress_elem from the nonzero upper-triangle components equals the r-weighted
+    average of the whole (3, 3) field, bit for bit."""
+    sub = substrate()
+    res = sub.solve(dT_nodal=field(sub.mesh.p))
+    w = sub.rdx
+    full = np.moveaxis((res.stress_qp * w).sum(axis=-1) / w.sum(axis=-1), -1, 0)
+    assert np.array_equal(res.stress_elem, full)
+    assert np.abs(full[:, 0, 1]).max() > 0 and not np.any(full[:, 0, 2])

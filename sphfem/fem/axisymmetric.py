@@ -262,9 +262,15 @@ class AxisymmetricResult(FEMResult):
         """Volume average (weight r dr dz) of the stress per element, (nelems, 3, 3)
         (cached)."""
         if "stress_elem" not in self.__dict__:
+            # per component of the upper triangle that is not zero everywhere (the theta
+            # shears are), mirrored: the same sums as over the whole (3, 3) field
             w = self.substrate.rdx
-            S = (self.stress_qp * w).sum(axis=-1) / w.sum(axis=-1)
-            self.__dict__["stress_elem"] = np.moveaxis(S, -1, 0)
+            ws = w.sum(axis=-1)
+            S, out = self.stress_qp, np.zeros((3, 3, w.shape[0]))
+            for i, j in zip(*np.triu_indices(3), strict=True):
+                if np.any(S[i, j]):
+                    out[i, j] = out[j, i] = (S[i, j] * w).sum(axis=-1) / ws
+            self.__dict__["stress_elem"] = np.moveaxis(out, -1, 0)
         return self.__dict__["stress_elem"]
 
     @property
