@@ -27,7 +27,8 @@ Passes (Park 2019 equation numbers in brackets):
 from __future__ import annotations
 
 import numpy as np
-from numba import njit, prange
+from numba import njit, prange, types
+from numba.extending import overload
 
 from sphfem.fluid.eos import tait_pressure
 from sphfem.kernels import FASTMATH, WENDLAND_C2, kernel_dfdq
@@ -169,6 +170,103 @@ def _gather_rows(offsets, new_off, buf, out):
             out[k + q] = buf[o + q]
 
 
+# The compacted in-range rows (``nb``) come in two forms, told apart by their type when
+# numba compiles a pass (the helpers below are overloaded on it):
+#
+# * an index array shaped like the list's ``indices``: row i's in-range neighbours are
+#   ``nb[o : o + c]`` (o = offsets[i], c = cnt[i]), 4 B per listed pair;
+# * a tuple ``(pos, indices)`` with ``pos`` uint16 shaped like ``indices``: the in-range
+#   entries are ``indices[o + pos[o : o + c]]``, their positions in the list row, 2 B per
+#   listed pair (rows of at most 65,536 entries).  The passes gather a row into a small
+#   per-block buffer of list indices and run the same pair loops, so the sums are
+#   bit-identical to the index form.
+
+#: the largest list row the position form of the compacted rows can address
+MAX_POS_ROW = 1 << 16
+
+
+def _row_tmp(nb, offsets, lo, hi):
+    """A per-block buffer of list indices as long as the longest row in [lo, hi) (the
+    position form), or an empty one (the index form)."""
+
+
+@overload(_row_tmp, inline="always")
+def _row_tmp_ov(nb, offsets, lo, hi):
+    if isinstance(nb, types.BaseTuple):
+        def impl(nb, offsets, lo, hi):
+            m = 0
+            for i in range(lo, hi):
+                m = max(m, offsets[i + 1] - offsets[i])
+            return np.empty(m, dtype=nb[1].dtype)
+        return impl
+    return lambda nb, offsets, lo, hi: np.empty(0, dtype=nb.dtype)
+
+
+def _mark_target(nb, o, e, tmp):
+    """Where a row's entries ``o:e`` are marked and squeezed: its own slots of ``nb``
+    (index form) or the block's buffer (position form)."""
+
+
+@overload(_mark_target, inline="always")
+def _mark_target_ov(nb, o, e, tmp):
+    if isinstance(nb, types.BaseTuple):
+        return lambda nb, o, e, tmp: tmp[:e - o]
+    return lambda nb, o, e, tmp: nb[o:e]
+
+
+def _squeeze_into(row, nb, o):
+    """Move the entries >= 0 of ``row`` to its front (in place, order kept) and return
+    their count; the position form also stores their positions at ``nb[0][o:]``."""
+
+
+@overload(_squeeze_into, inline="always")
+def _squeeze_into_ov(row, nb, o):
+    if isinstance(nb, types.BaseTuple):
+        def impl(row, nb, o):
+            pos = nb[0]
+            c = 0
+            for k in range(row.shape[0]):
+                v = row[k]
+                row[c] = v
+                pos[o + c] = k
+                c += v >= 0
+            return c
+        return impl
+    return lambda row, nb, o: _squeeze(row)
+
+
+def _put(nb, q, k, j):
+    """Store kept entry ``k`` of a row (neighbour ``j``) at slot ``q``."""
+
+
+@overload(_put, inline="always")
+def _put_ov(nb, q, k, j):
+    if isinstance(nb, types.BaseTuple):
+        def impl(nb, q, k, j):
+            nb[0][q] = k
+        return impl
+
+    def impl_index(nb, q, k, j):
+        nb[q] = j
+    return impl_index
+
+
+def _kept_row(nb, o, c, tmp):
+    """Row i's in-range neighbours (list indices) from slot ``o``, ``c`` of them."""
+
+
+@overload(_kept_row, inline="always")
+def _kept_row_ov(nb, o, c, tmp):
+    if isinstance(nb, types.BaseTuple):
+        def impl(nb, o, c, tmp):
+            pos, idx = nb
+            for k in range(c):
+                tmp[k] = idx[o + np.int64(pos[o + k])]
+            return tmp[:c]
+        return impl
+    return lambda nb, o, c, tmp: nb[o:o + c]
+
+
 @njit(cache=True, inline="always")
 def _emit_other_row(x, kind, i, offsets, indices, R2, dim, period, periodic, nb):
     """Compact a non-fluid row: a wall keeps its fluid neighbours with 0 < r < R
@@ -181,7 +279,7 @@ def _emit_other_row(x, kind, i, offsets, indices, R2, dim, period, periodic, nb)
         j = indices[jj]
         r0, r1, r2 = pair_sep(x, i, j, dim, period, periodic)
         d2 = r0 * r0 + r1 * r1 + r2 * r2
-        nb[o + c] = j
+        _put(nb, o + c, jj - o, j)
         c += (kind[j] == FLUID) & ~((d2 >= R2) | (d2 == 0.0))
     return c
 
@@ -220,21 +318,23 @@ def _squeeze(row):
 
 
 @njit(cache=True, inline="always")
-def _emit_fluid_row(x, i, offsets, indices, R2, dim, period, periodic, nb, fast):
-    """Compact a fluid row: its neighbours with 0 < r < R into ``nb[o : o + c]``, in order;
-    returns c.  A marking loop (versioned like the pair loops, ``fast``:
-    :func:`_fast_case`), then a branch-free squeeze."""
+def _emit_fluid_row(x, i, offsets, indices, R2, dim, period, periodic, nb, fast, tmp):
+    """Compact a fluid row: its neighbours with 0 < r < R, in order (index form: into
+    ``nb[o : o + c]``; position form: their positions into ``nb[0][o : o + c]``).  A
+    marking loop (versioned like the pair loops, ``fast``: :func:`_fast_case`), then a
+    branch-free squeeze.  Returns the kept neighbours' indices (a view of ``nb`` or
+    ``tmp``, length c)."""
     o = offsets[i]
     e = offsets[i + 1]
     src = indices[o:e]
-    dst = nb[o:e]
+    dst = _mark_target(nb, o, e, tmp)
     if fast == 3:
         _mark_row(x, i, src, dst, R2, 3, period, False)
     elif fast == 2:
         _mark_row(x, i, src, dst, R2, 2, period, False)
     else:
         _mark_row(x, i, src, dst, R2, dim, period, periodic)
-    return _squeeze(dst)
+    return dst[:_squeeze_into(dst, nb, o)]
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH, error_model="numpy")
@@ -244,8 +344,9 @@ def compact_rows(x, kind, offsets, indices, R, period, nb, cnt):
     Fluid rows keep their neighbours with 0 < r < R, wall rows their fluid neighbours with
     0 < r < R, other rows nothing -- exactly the pairs :func:`fluid_forces` would not skip
     (same order, so the sums are bit-identical).  Written into the rows' own slots of
-    ``nb`` (a fluid-owned buffer shaped like ``indices``; no prefix sum).  Used when
-    :func:`density_gradient`, which emits the same rows, does not run.
+    ``nb`` (a work buffer shaped like ``indices``, or ``(pos, indices)``: the positions
+    in the row, see above; no prefix sum).  Used when :func:`density_gradient`, which
+    emits the same rows, does not run.
     """
     n, dim = x.shape
     R2 = R * R
@@ -255,19 +356,20 @@ def compact_rows(x, kind, offsets, indices, R, period, nb, cnt):
     fast = _fast_case(dim, periodic, WENDLAND_C2)
     for b in prange(NBLOCKS):  # blocks of equal list length (balanced threads)
         lo, hi = _block(b, offsets)
+        tmp = _row_tmp(nb, offsets, lo, hi)
         for i in range(lo, hi):
             if kind[i] != FLUID:
                 cnt[i] = _emit_other_row(x, kind, i, offsets, indices, R2, dim, period, periodic,
                                          nb)
             else:
                 cnt[i] = _emit_fluid_row(x, i, offsets, indices, R2, dim, period, periodic, nb,
-                                         fast)
+                                         fast, tmp).shape[0]
 
 
 @njit(cache=True, inline="always")
-def _dg_sums(x, rho, V, nb, o, c, i, R, fac2, kernel_code, dim, period, periodic):
+def _dg_sums(x, rho, V, row, i, R, fac2, kernel_code, dim, period, periodic):
     """Moment matrix and un-normalised density gradient of row i over its compacted
-    neighbours ``nb[o : o + c]`` (no branches in the loop: it vectorises)."""
+    neighbours ``row`` (no branches in the loop: it vectorises)."""
     m00 = 0.0
     m01 = 0.0
     m02 = 0.0
@@ -278,8 +380,7 @@ def _dg_sums(x, rho, V, nb, o, c, i, R, fac2, kernel_code, dim, period, periodic
     g1 = 0.0
     g2 = 0.0
     ri = rho[i]
-    row = nb[o:o + c]
-    for k in range(c):
+    for k in range(row.shape[0]):
         j = np.uint32(row[k])  # unsigned: no negative-index wraparound in the gathers
         r0, r1, r2 = pair_sep(x, i, j, dim, period, periodic)
         d2 = r0 * r0 + r1 * r1 + r2 * r2
@@ -306,8 +407,9 @@ def density_gradient(x, rho, V, kind, offsets, indices, R, sigma, kernel_code, p
     singular or worse conditioned than ``cond_max`` (free surface, sparse splashes),
     ``ok[i] = False`` and the plain difference gradient is used.
 
-    Also compacts the rows as :func:`compact_rows` does (``nb``, ``cnt``), from the pair
-    distances it computes anyway: the later passes then visit only the in-range pairs.
+    Also compacts the rows as :func:`compact_rows` does (``nb``, ``cnt``, either form), from
+    the pair distances it computes anyway: the later passes then visit only the in-range
+    pairs.
     Per row, a branch-free compaction loop over the Verlet row, then the sums over the
     compacted row (a loop without branches, which LLVM vectorises).
     """
@@ -320,6 +422,7 @@ def density_gradient(x, rho, V, kind, offsets, indices, R, sigma, kernel_code, p
     fast = _fast_case(dim, periodic, kernel_code)
     for b in prange(NBLOCKS):  # blocks of equal list length (balanced threads)
         lo, hi = _block(b, offsets)
+        tmp = _row_tmp(nb, offsets, lo, hi)
         for i in range(lo, hi):
             if kind[i] != FLUID:
                 for k in range(dim):
@@ -328,20 +431,20 @@ def density_gradient(x, rho, V, kind, offsets, indices, R, sigma, kernel_code, p
                 cnt[i] = _emit_other_row(x, kind, i, offsets, indices, R2, dim, period, periodic,
                                          nb)
                 continue
-            o = offsets[i]
-            c = _emit_fluid_row(x, i, offsets, indices, R2, dim, period, periodic, nb, fast)
-            cnt[i] = c
+            row = _emit_fluid_row(x, i, offsets, indices, R2, dim, period, periodic, nb, fast,
+                                  tmp)
+            cnt[i] = row.shape[0]
             # the loop versioned with constant kernel, dim and periodicity for the common
             # cases (loop-invariant branches inside the loop block or blunt SIMD)
             if fast == 3:
                 m00, m01, m02, m11, m12, m22, g0, g1, g2 = _dg_sums(
-                    x, rho, V, nb, o, c, i, R, fac2, WENDLAND_C2, 3, period, False)
+                    x, rho, V, row, i, R, fac2, WENDLAND_C2, 3, period, False)
             elif fast == 2:
                 m00, m01, m02, m11, m12, m22, g0, g1, g2 = _dg_sums(
-                    x, rho, V, nb, o, c, i, R, fac2, WENDLAND_C2, 2, period, False)
+                    x, rho, V, row, i, R, fac2, WENDLAND_C2, 2, period, False)
             else:
                 m00, m01, m02, m11, m12, m22, g0, g1, g2 = _dg_sums(
-                    x, rho, V, nb, o, c, i, R, fac2, kernel_code, dim, period, periodic)
+                    x, rho, V, row, i, R, fac2, kernel_code, dim, period, periodic)
             good, b00, b01, b02, b10, b11, b12, b20, b21, b22 = invert_sym3(
                 m00, m01, m02, m11, m12, m22, dim, cond_max)
             ok[i] = good
@@ -489,19 +592,20 @@ def _wall_row_sums(P, i, row, R2, R, fac2, kernel_code, dim, pp, periodic, eps2,
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH, error_model="numpy")
-def fluid_forces(P, kind, offsets, cnt, indices, R, sigma, kernel_code, period, gravity, eps2,
+def fluid_forces(P, kind, offsets, cnt, nb, R, sigma, kernel_code, period, gravity, eps2,
                  delta_coef, art_coef, acc, drho, f_wall):
     """Accelerations and density rates of fluid particles; fluid forces on wall particles.
 
     ``P`` holds the packed rows of :func:`pack_rows`; row i's neighbours are
-    ``indices[offsets[i] : offsets[i] + cnt[i]]`` (the compacted rows of :func:`compact_rows` /
-    :func:`density_gradient`, or a full list with ``cnt = diff(offsets)``: pairs beyond R are
-    skipped either way).  ``eps2`` is the viscous regulariser (eps_visc h^2), ``delta_coef =
-    delta h c0`` (0: no diffusive term), ``art_coef = alpha h c0`` (0: no artificial viscosity;
-    Monaghan 1992 in the always-on form of Marrone et al. 2011, symmetrised: pair acceleration 2
-    m_j alpha h c0 / (rho_i + rho_j) (u_ji . r) r F / (r^2 + eps2)).  Fluid rows of ``acc``
-    (m/s^2) and ``drho`` (kg/m^3/s) and wall rows of ``f_wall`` (N) are written; other rows are
-    zeroed (a wall's ``acc``, its prescribed acceleration, is left alone).
+    ``nb[offsets[i] : offsets[i] + cnt[i]]`` (the compacted rows of :func:`compact_rows` /
+    :func:`density_gradient` in either form, or a full list's indices with ``cnt =
+    diff(offsets)``: pairs beyond R are skipped either way).  ``eps2`` is the viscous
+    regulariser (eps_visc h^2), ``delta_coef = delta h c0`` (0: no diffusive term),
+    ``art_coef = alpha h c0`` (0: no artificial viscosity; Monaghan 1992 in the always-on
+    form of Marrone et al. 2011, symmetrised: pair acceleration 2 m_j alpha h c0 /
+    (rho_i + rho_j) (u_ji . r) r F / (r^2 + eps2)).  Fluid rows of ``acc`` (m/s^2) and
+    ``drho`` (kg/m^3/s) and wall rows of ``f_wall`` (N) are written; other rows are zeroed
+    (a wall's ``acc``, its prescribed acceleration, is left alone).
     """
     dim = acc.shape[1]
     R2 = R * R
@@ -515,6 +619,7 @@ def fluid_forces(P, kind, offsets, cnt, indices, R, sigma, kernel_code, period, 
     use_delta = delta_coef != 0.0
     for b in prange(NBLOCKS):  # blocks of equal list length (balanced threads)
         lo, hi = _block(b, offsets)
+        tmp = _row_tmp(nb, offsets, lo, hi)
         for i in range(lo, hi):
             ki = kind[i]
             if ki != FLUID and ki != WALL:
@@ -523,7 +628,7 @@ def fluid_forces(P, kind, offsets, cnt, indices, R, sigma, kernel_code, period, 
                     f_wall[i, k] = 0.0
                 drho[i] = 0.0
                 continue
-            row = indices[offsets[i]:offsets[i] + cnt[i]]
+            row = _kept_row(nb, offsets[i], cnt[i], tmp)
             if ki == FLUID:
                 if fast == 3:
                     a0, a1, a2, cont, diff = _fluid_row_sums(

@@ -349,7 +349,7 @@ class FluidSolver:
         """The fluid's view of the neighbour list: the context's list itself when it was
         built with the fluid's pair filter (no reference of its own is kept, so the driver
         can free the old list before building the next), else the filtered copy."""
-        if self._view is None and self._nbrs_version >= 0 and _is_fluid_view(self.ctx):
+        if self._view is None and _is_fluid_view(self.ctx):
             return self.ctx.nbrs
         return self._view
 
@@ -364,7 +364,14 @@ class FluidSolver:
         self._new_list()
 
     def _new_list(self) -> None:
-        """A new view: count it, (re)size the per-particle scratch arrays."""
+        """A new view: check its rows fit the position form of the compacted rows, count
+        it, (re)size the per-particle scratch arrays."""
+        off = self.nbrs.offsets
+        longest = int(np.diff(off).max()) if off.shape[0] > 1 else 0
+        if longest > passes.MAX_POS_ROW:
+            raise ValueError(f"fluid: a neighbour-list row holds {longest} entries, more "
+                             f"than the {passes.MAX_POS_ROW} the compacted "
+                             "rows address (a resolution or skin far beyond the kernel's)")
         self.n_rebuilds += 1
         if self._scratch is None or self._scratch.n != self.p.n:
             self._scratch = _Scratch(self.p.n, self.dim, self.params.uses_free_surface)
@@ -429,10 +436,11 @@ class FluidSolver:
         # the delta-SPH term only feeds drho, which a projection method does not use (it sums
         # the density itself): no diffusive term, so no density gradient unless shifting needs it
         delta_coef = pa.delta * self.h * pa.c0 if eos else 0.0
-        # in-range rows: the thread's work buffer (free between two list builds; the list
-        # itself is left untouched), a view dropped at the end of the evaluation
+        # in-range rows as positions in the list rows (uint16, 2 B per listed pair; the
+        # passes' position form) in the thread's work buffer (free between two list builds;
+        # the list itself is left untouched), a view dropped at the end of the evaluation
         m = nl.indices.shape[0]
-        nb = work_buffer(m * nl.indices.itemsize).view(nl.indices.dtype)
+        nb = (work_buffer(2 * m).view(np.uint16), nl.indices)
         cnt = s.cnt
         if delta_coef > 0 or pa.shifting != "none":
             passes.density_gradient(p.x, p.rho, s.V, p.kind, nl.offsets, nl.indices, self.R,
