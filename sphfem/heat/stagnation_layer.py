@@ -58,7 +58,21 @@ _ETA_MAX = 12.0
 @functools.lru_cache(maxsize=4)
 def stagnation_profile(c: int):
     """(eta, f, f'') on [0, 12] of eq. (1) (c = 1 Hiemenz, c = 2 Homann), by scipy's
-    solve_bvp to 1e-10; beyond eta = 12, f = eta - beta (beta = eta - f there)."""
+    solve_bvp to 1e-10; beyond eta = 12, f = eta - beta (beta = eta - f there).  Kept on
+    disk (:func:`sphfem.cache.cached_array`, key: c and the numpy / scipy versions): the
+    solve takes ~0.8 CPU-s, the first coupling step of every strained-viscous run."""
+    import scipy
+
+    from sphfem.cache import cached_array
+
+    table = cached_array("stagnation_profile", {"c": int(c), "eta_max": _ETA_MAX, "recipe": 1,
+                                                "numpy": np.__version__,
+                                                "scipy": scipy.__version__},
+                         lambda: np.stack(_solve_profile(c)))
+    return table[0], table[1], table[2]
+
+
+def _solve_profile(c: int):
     from scipy.integrate import solve_bvp
 
     def fun(x, y):

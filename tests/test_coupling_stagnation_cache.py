@@ -1,0 +1,25 @@
+"""The Hiemenz/Homann profile table of the strained-viscous contact layer
+(sphfem.heat.stagnation_layer.stagnation_profile) kept on disk: read back bit for bit
+equal to the solve, and the file is where sphfem.cache puts it."""
+
+import numpy as np
+
+from sphfem.heat import stagnation_layer as sl
+
+
+def test_profile_read_back_equals_the_solve(tmp_path, monkeypatch):
+    monkeypatch.setenv("SPHFEM_CACHE", str(tmp_path))
+    sl.stagnation_profile.cache_clear()
+    try:
+        first = sl.stagnation_profile(2)
+        files = list((tmp_path / "stagnation_profile").glob("*.npy"))
+        assert len(files) == 1
+        sl.stagnation_profile.cache_clear()
+        again = sl.stagnation_profile(2)  # from the file
+        solved = sl._solve_profile(2)
+        for a, b, c in zip(first, again, solved, strict=True):
+            assert np.array_equal(a, c) and np.array_equal(b, c)
+        # Homann's f''(0) = 1.3119 (White, Viscous Fluid Flow, sec. 3-8)
+        assert abs(solved[2][0] - 1.3119) < 1e-4
+    finally:
+        sl.stagnation_profile.cache_clear()
