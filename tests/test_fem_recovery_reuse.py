@@ -70,12 +70,33 @@ def test_projection_against_scikit_fem_and_zero_components():
     assert res.von_mises_nodes is res.von_mises_nodes
 
 
-def test_element_averages_over_the_nonzero_components():
-    """stress_elem from the nonzero upper-triangle components equals the r-weighted
-    average of the whole (3, 3) field, bit for bit."""
-    sub = substrate()
-    res = sub.solve(dT_nodal=field(sub.mesh.p))
+@pytest.mark.parametrize("element", ["P1", "P2"])
+@pytest.mark.parametrize("with_dT", [True, False])
+def test_linear_stress_maps_equal_the_quadrature_path(element, with_dT):
+    """Nodal (projected) and element-averaged stresses by the linear maps of (u, dT)
+    against the projection / average of the stress at the quadrature points, to 1e-12 of
+    the largest stress; a callable dT takes the quadrature path."""
+    from sphfem.fem.axisymmetric import AxisymmetricResult
+
+    sub = substrate(element)
+    dT = field(sub.mesh.p) if with_dT else None
+    res = sub.solve(dT_nodal=dT,
+                    tractions={"top": lambda x: np.array([0 * x[0], -1e6 * (x[0] < 2e-4)])})
+    Sn, Se = res.stress_nodes, res.stress_elem
+    Sq = res.stress_qp
+    ref_n = sub.project_tensor(Sq)
     w = sub.rdx
-    full = np.moveaxis((res.stress_qp * w).sum(axis=-1) / w.sum(axis=-1), -1, 0)
-    assert np.array_equal(res.stress_elem, full)
-    assert np.abs(full[:, 0, 1]).max() > 0 and not np.any(full[:, 0, 2])
+    ref_e = np.moveaxis((Sq * w).sum(axis=-1) / w.sum(axis=-1), -1, 0)
+    scale = np.abs(ref_n).max()
+    assert scale > 1e5
+    assert np.abs(Sn - ref_n).max() < 1e-12 * scale
+    assert np.abs(Se - ref_e).max() < 1e-12 * np.abs(ref_e).max()
+    assert not np.any(Sn[:, 0, 2]) and not np.any(Se[:, 1, 2])
+    if with_dT:  # the same field as a callable: the quadrature path, bit for bit (the
+        # element averages over the nonzero upper-triangle components, mirrored)
+        other = AxisymmetricResult(sub, res.dofs, res.load, lambda X: field(X), {})
+        assert sub.linear_stress(res.dofs, other.dT_spec, "nodes") is None
+        assert np.array_equal(other.stress_nodes, sub.project_tensor(other.stress_qp))
+        Sq = other.stress_qp
+        full = np.moveaxis((Sq * w).sum(axis=-1) / w.sum(axis=-1), -1, 0)
+        assert np.array_equal(other.stress_elem, full)

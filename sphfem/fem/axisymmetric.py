@@ -258,10 +258,25 @@ class AxisymmetricResult(FEMResult):
         return self.__dict__["stress_qp"]
 
     @property
+    def stress_nodes(self) -> np.ndarray:
+        """Cauchy stress L2-projected onto the P1 vertex field, (nvertices, 3, 3) (cached):
+        by the substrate's linear maps of (u, dT) (:meth:`AxisymmetricFEMSubstrate.
+        linear_stress`) when dT is None or a vertex array, else from :attr:`stress_qp`."""
+        if "stress_nodes" not in self.__dict__:
+            S = self.substrate.linear_stress(self.dofs, self.dT_spec, "nodes")
+            self.__dict__["stress_nodes"] = (S if S is not None else
+                                             self.substrate.project_tensor(self.stress_qp))
+        return self.__dict__["stress_nodes"]
+
+    @property
     def stress_elem(self) -> np.ndarray:
         """Volume average (weight r dr dz) of the stress per element, (nelems, 3, 3)
-        (cached)."""
+        (cached; by the linear maps as :attr:`stress_nodes`)."""
         if "stress_elem" not in self.__dict__:
+            S = self.substrate.linear_stress(self.dofs, self.dT_spec, "elements")
+            if S is not None:
+                self.__dict__["stress_elem"] = S
+                return S
             # per component of the upper triangle that is not zero everywhere (the theta
             # shears are), mirrored: the same sums as over the whole (3, 3) field
             w = self.substrate.rdx
@@ -337,6 +352,7 @@ class AxisymmetricFEMSubstrate(FEMSubstrate):
                          rollers=rollers, solver=solver, pin_rigid=pin_rigid,
                          nthreads=nthreads, direct_backend=direct_backend, intorder=intorder)
         self._thermal_matrices: dict = {}  # thermal_load's B per dT basis
+        self._stress_map_cache: dict = {}  # linear_stress's maps per "nodes" / "elements"
         self.r_qp = self.basis.global_coordinates()[0]  # (nelems, nqp)
         self.rdx = self.r_qp * self.basis.dx  # r-weighted quadrature weights
 
@@ -389,6 +405,85 @@ class AxisymmetricFEMSubstrate(FEMSubstrate):
     def cell_volume(self) -> np.ndarray:
         """Volumes of the rings swept by the cells, 2 pi int r dr dz, (nelems,) [m^3]."""
         return TWO_PI * self.rdx.sum(axis=-1)
+
+    # ------------------------------------------------------------------ stress maps
+    #: the stress components that are not zero, (r, r), (z, z), (theta, theta), (r, z)
+    _LIVE = ((0, 0), (1, 1), (2, 2), (0, 1))
+
+    def linear_stress(self, dofs, dT, where: str):
+        """The stress of a solve as linear maps of its displacement dofs u and vertex
+        temperature change dT, built once (:meth:`_stress_maps`): ``where`` = "nodes", the
+        L2 projection onto the vertices M^-1 (R L_c u - beta R Phi dT), or "elements", the
+        r-weighted element averages (A L_c u - beta A Phi dT), each (n, 3, 3) in the order
+        (r, z, theta).  L_c maps u to the stress component c at the quadrature points (the
+        strains e_rr, e_zz, e_tt = u_r / r, e_rz of :func:`axisymmetric_stress`), Phi the
+        vertex values to dT there, R the projection's right-hand sides, A the averaging
+        weights r dx / sum r dx; the same sums as from :attr:`AxisymmetricResult.stress_qp`
+        in another order (round-off).  None when dT is neither None nor a vertex array."""
+        if dT is not None and (callable(dT) or np.shape(dT) != (self.mesh.nvertices,)):
+            return None
+        ops = self._stress_maps(where)
+        dofs = np.asarray(dofs, float)
+        vals = [Lu @ dofs for Lu in ops[0]]
+        if dT is not None:
+            t = ops[1] @ np.asarray(dT, float)
+            for c in range(3):  # -(3 lam + 2 mu) alpha dT on the diagonal
+                vals[c] = vals[c] - t
+        X = np.column_stack(vals)
+        if where == "nodes":
+            X = self.mass_solve(X)
+        out = np.zeros((X.shape[0], 3, 3))
+        for k, (i, j) in enumerate(self._LIVE):
+            out[:, i, j] = out[:, j, i] = X[:, k]
+        return out
+
+    def _stress_maps(self, where: str):
+        """([Q L_c for c in _LIVE], beta Q Phi) with Q = R (nodes) or A (elements)."""
+        maps = self._stress_map_cache
+        if where in maps:
+            return maps[where]
+        import scipy.sparse as sp
+
+        G, _, edofs = self._qp_tables()  # (nloc, 2, nel, nqp), (nloc, 2, nel)
+        if self._phi is None:
+            self.values_qp(np.zeros(self.basis.N))  # fills the basis values table
+        phi = self._phi  # (nloc, nel, nqp)
+        nloc, _, nel, nqp = G.shape
+        rows = np.broadcast_to(np.arange(nel * nqp).reshape(nel, nqp), (nloc, nel, nqp))
+        shape = (nel * nqp, self.basis.N)
+
+        def op(parts):
+            """Sum over (component c, values (nloc, nel, nqp)) of the map u -> sum_a
+            u_(a, c) values[a] at every quadrature point."""
+            r, c, v = [], [], []
+            for comp, val in parts:
+                r.append(rows.ravel())
+                c.append(np.broadcast_to(edofs[:, comp, :, None], val.shape).ravel())
+                v.append(val.ravel())
+            return sp.csr_matrix((np.concatenate(v), (np.concatenate(r), np.concatenate(c))),
+                                 shape=shape)
+
+        err, ezz = op([(0, G[:, 0])]), op([(1, G[:, 1])])
+        ett = op([(0, phi / self.r_qp)])
+        erz = op([(0, 0.5 * G[:, 1]), (1, 0.5 * G[:, 0])])
+        lam, mu = self.lam, self.mu
+        L = [(lam + 2 * mu) * err + lam * (ezz + ett), (lam + 2 * mu) * ezz + lam * (err + ett),
+             (lam + 2 * mu) * ett + lam * (err + ezz), 2 * mu * erz]
+        vb = self.vbasis
+        vphi = np.stack([np.asarray(vb.basis[k][0]) for k in range(vb.Nbfun)])
+        vrows = np.broadcast_to(np.arange(nel * nqp).reshape(nel, nqp), vphi.shape)
+        vcols = np.broadcast_to(vb.element_dofs[:, :, None], vphi.shape)
+        Phi = sp.csr_matrix((vphi.ravel(), (vrows.ravel(), vcols.ravel())),
+                            shape=(nel * nqp, vb.N))
+        if where == "nodes":
+            Q = self.projection_rhs()
+        else:
+            w = self.rdx / self.rdx.sum(axis=-1, keepdims=True)
+            Q = sp.csr_matrix((w.ravel(), (np.repeat(np.arange(nel), nqp),
+                                           np.arange(nel * nqp))), shape=(nel, nel * nqp))
+        beta = forms.thermal_modulus(lam, mu) * self.alpha
+        maps[where] = ([(Q @ Lc).tocsr() for Lc in L], (beta * (Q @ Phi)).tocsr())
+        return maps[where]
 
     # ------------------------------------------------------------------ loads
     def thermal_load(self, dT) -> np.ndarray:

@@ -716,6 +716,29 @@ class FEMSubstrate(QuasiStaticSubstrate):
         return FEMResult(self, u, f, dT, info)
 
     # ------------------------------------------------------------------ projection
+    def projection_rhs(self) -> sp.csr_matrix:
+        """R (nvertices, nelems * nqp), assembled once: R s = int s phi_j dx for a field s
+        given at the quadrature points of ``basis`` (flattened element-major)."""
+        if self._mass is None:
+            vb = self.vbasis
+            self._mass = forms.mass.assemble(vb).tocsr()
+            self._mass_diag = self._mass.diagonal()
+            self._mass_factor = factorize(self._mass, "splu") if self.dim == 2 else None
+            w = np.stack([np.asarray(vb.basis[k][0]) * vb.dx
+                          for k in range(vb.Nbfun)])  # (nloc, nel, nqp)
+            cols = np.broadcast_to(np.arange(w[0].size).reshape(w[0].shape), w.shape)
+            rows = np.broadcast_to(vb.element_dofs[:, :, None], w.shape)
+            self._projection_rhs = sp.csr_matrix((w.ravel(), (rows.ravel(), cols.ravel())),
+                                                 shape=(vb.N, w[0].size))
+        return self._projection_rhs
+
+    def mass_solve(self, rhs: np.ndarray) -> np.ndarray:
+        """M^-1 rhs, M the P1 vertex mass matrix (:meth:`project_tensor`)."""
+        self.projection_rhs()
+        if self._mass_factor is not None:
+            return self._mass_factor.solve(rhs)
+        return _block_pcg(self._mass, rhs, self._mass_diag, rtol=1e-12, maxiter=500)
+
     def project_tensor(self, Sq: np.ndarray) -> np.ndarray:
         """L2 projection of a (3, 3, nelems, nqp) quadrature field onto P1 vertex values,
         (nvertices, 3, 3): M x = R s for the 6 components at once, M the P1 mass matrix
@@ -727,27 +750,12 @@ class FEMSubstrate(QuasiStaticSubstrate):
         well conditioned whatever the mesh size) to a relative residual of 1e-12 in every
         component."""
         vb = self.vbasis
-        if self._mass is None:
-            self._mass = forms.mass.assemble(vb).tocsr()
-            self._mass_diag = self._mass.diagonal()
-            self._mass_factor = factorize(self._mass, "splu") if self.dim == 2 else None
-            w = np.stack([np.asarray(vb.basis[k][0]) * vb.dx
-                          for k in range(vb.Nbfun)])  # (nloc, nel, nqp)
-            cols = np.broadcast_to(np.arange(w[0].size).reshape(w[0].shape), w.shape)
-            rows = np.broadcast_to(vb.element_dofs[:, :, None], w.shape)
-            self._projection_rhs = sp.csr_matrix((w.ravel(), (rows.ravel(), cols.ravel())),
-                                                 shape=(vb.N, w[0].size))
         iu = np.triu_indices(3)
         comps = np.asarray(Sq)[iu].reshape(6, -1)  # (6, nelems * nqp)
         live = np.flatnonzero(np.any(comps != 0.0, axis=1))
         x = np.zeros((vb.N, 6))
         if live.size:
-            rhs = self._projection_rhs @ comps[live].T  # (N, live)
-            if self._mass_factor is not None:
-                x[:, live] = self._mass_factor.solve(rhs)
-            else:
-                x[:, live] = _block_pcg(self._mass, rhs, self._mass_diag, rtol=1e-12,
-                                        maxiter=500)
+            x[:, live] = self.mass_solve(self.projection_rhs() @ comps[live].T)
         out = np.empty((vb.N, 3, 3))
         out[:, iu[0], iu[1]] = x
         out[:, iu[1], iu[0]] = x
