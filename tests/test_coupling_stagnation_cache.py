@@ -1,6 +1,6 @@
-"""The Hiemenz/Homann profile table of the strained-viscous contact layer
-(sphfem.heat.stagnation_layer.stagnation_profile) kept on disk: read back bit for bit
-equal to the solve, and the file is where sphfem.cache puts it."""
+"""The Hiemenz/Homann profile table of the strained-viscous contact layer and its J(sigma)
+table (sphfem.heat.stagnation_layer.stagnation_profile, _tables) kept on disk: read back
+bit for bit equal to the computation, and the files are where sphfem.cache puts them."""
 
 import numpy as np
 
@@ -21,5 +21,15 @@ def test_profile_read_back_equals_the_solve(tmp_path, monkeypatch):
             assert np.array_equal(a, c) and np.array_equal(b, c)
         # Homann's f''(0) = 1.3119 (White, Viscous Fluid Flow, sec. 3-8)
         assert abs(solved[2][0] - 1.3119) < 1e-4
+        # the J(sigma) table likewise
+        sl._tables.cache_clear()
+        J1 = sl._tables(2)[1]
+        assert len(list((tmp_path / "stagnation_J").glob("*.npy"))) == 1
+        sl._tables.cache_clear()
+        J2 = sl._tables(2)[1]
+        eta, f, _ = solved
+        J0 = sl._J_table(eta, f, float(eta[-1] - f[-1]), np.logspace(-4, 4, 801))
+        assert np.array_equal(J1, J0) and np.array_equal(J2, J0)
     finally:
         sl.stagnation_profile.cache_clear()
+        sl._tables.cache_clear()

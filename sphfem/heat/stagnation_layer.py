@@ -105,18 +105,15 @@ def _tables(c: int):
     eta, f, _ = stagnation_profile(c)
     beta = float(eta[-1] - f[-1])
     # J(sigma) on a log grid: quadrature on the table, then the tail f = eta - beta exactly
-    sig = np.logspace(-4, 4, 801)
-    J = np.empty_like(sig)
-    E = eta[-1]
-    from scipy.special import erfc
+    # (kept on disk as the profile: 0.4 CPU-s)
+    import scipy
 
-    for i, s in enumerate(sig):
-        g = np.exp(-eta ** 2 / (4.0 * s * s))
-        head = np.trapezoid(f * g, eta)
-        # int_E^inf (z - beta) exp(-z^2 / 4s^2) dz
-        tail = 2.0 * s * s * math.exp(-E * E / (4 * s * s)) - beta * s * math.sqrt(math.pi) \
-            * erfc(E / (2 * s))
-        J[i] = head + tail
+    from sphfem.cache import cached_array
+
+    sig = np.logspace(-4, 4, 801)
+    J = cached_array("stagnation_J", {"c": int(c), "eta_max": _ETA_MAX, "recipe": 1,
+                                      "numpy": np.__version__, "scipy": scipy.__version__},
+                     lambda: _J_table(eta, f, beta, sig))
     # lambda f(lambda) for the inversion of eq. (3)
     lam = eta[1:]
     P = lam * f[1:]
@@ -124,6 +121,21 @@ def _tables(c: int):
     lam = np.concatenate([lam, ext])
     P = np.concatenate([P, ext * (ext - beta)])
     return sig, J, lam, P, beta
+
+
+def _J_table(eta, f, beta: float, sig):
+    from scipy.special import erfc
+
+    J = np.empty_like(sig)
+    E = eta[-1]
+    for i, s in enumerate(sig):
+        g = np.exp(-eta ** 2 / (4.0 * s * s))
+        head = np.trapezoid(f * g, eta)
+        # int_E^inf (z - beta) exp(-z^2 / 4s^2) dz
+        tail = 2.0 * s * s * math.exp(-E * E / (4 * s * s)) - beta * s * math.sqrt(math.pi) \
+            * erfc(E / (2 * s))
+        J[i] = head + tail
+    return J
 
 
 def layer_J(sigma, c: int):
