@@ -223,14 +223,12 @@ def _squeeze_into(row, nb, o):
 def _squeeze_into_ov(row, nb, o):
     if isinstance(nb, types.BaseTuple):
         def impl(row, nb, o):
-            pos = nb[0]
-            c = 0
-            for k in range(row.shape[0]):
-                v = row[k]
-                row[c] = v
-                pos[o + c] = k
-                c += v >= 0
-            return c
+            pos = nb[0][o:o + row.shape[0]]
+            c = np.uint64(0)
+            for k in range(np.uint64(row.shape[0])):  # unsigned: no wraparound code
+                pos[c] = k
+                c += np.uint64(row[k] >= 0)
+            return _squeeze(row)
         return impl
     return lambda row, nb, o: _squeeze(row)
 
@@ -259,9 +257,10 @@ def _kept_row(nb, o, c, tmp):
 def _kept_row_ov(nb, o, c, tmp):
     if isinstance(nb, types.BaseTuple):
         def impl(nb, o, c, tmp):
-            pos, idx = nb
-            for k in range(c):
-                tmp[k] = idx[o + np.int64(pos[o + k])]
+            pos = nb[0][o:o + c]
+            row = nb[1][o:]
+            for k in range(np.uint64(c)):  # unsigned: no negative-index wraparound
+                tmp[k] = row[np.uint64(pos[k])]
             return tmp[:c]
         return impl
     return lambda nb, o, c, tmp: nb[o:o + c]
