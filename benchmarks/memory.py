@@ -15,6 +15,9 @@ Scenes:
 * any scene file, optionally with every resolution length times ``--scale`` (as the
   numba warm-up coarsens a scene, :func:`sphfem.resolution.scaled_resolution`).
 
+A scene whose modules all read the same pairs (the fluid alone: its view, wall-wall pairs
+left out) has its list built with that pair filter; "listed pairs" counts those.
+
 Bytes per particle of a module = its set-up stage's resident step / particles (arrays it
 allocates and keeps) and, between two sizes of one scene, the slope of the peak
 (``(peak2 - peak1) / (n2 - n1)``: everything that grows with the particles).
@@ -108,6 +111,7 @@ def _child(job: str) -> int:
     print(json.dumps({
         "n": int(sim.particles.n), "n_fluid": int((sim.particles.kind == 0).sum()),
         "pairs": int(sim.nbrs.indices.shape[0]), "index_dtype": str(sim.nbrs.indices.dtype),
+        "pair_filter": sim.ctx.pair_filter is not None,
         "rss_start_mb": base, "rss_imports_mb": imports, "setup_s": setup_s,
         "stages": [{"stage": s["stage"], "rss_mb": s["rss_mb"], "s": s["s"]}
                    for s in sim.stage_log.stages],
@@ -131,8 +135,9 @@ def measure(job: dict) -> dict:
 
 
 def report(r: dict, label: str) -> None:
+    view = ", the modules' pair filter" if r.get("pair_filter") else ""
     print(f"{label}: {r['n']} particles ({r['n_fluid']} fluid), {r['pairs']} listed pairs "
-          f"({r['index_dtype']}), set-up {r['setup_s']:.1f} s, {r['steps']} steps "
+          f"({r['index_dtype']}{view}), set-up {r['setup_s']:.1f} s, {r['steps']} steps "
           f"{r['steps_s']:.1f} s, compilations {r['numba_compilations']}")
     prev = r["rss_imports_mb"]
     print(f"  {prev:8.0f} MB  imports")

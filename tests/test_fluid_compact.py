@@ -144,3 +144,24 @@ def test_compaction_keeps_order_and_in_range_pairs():
             keep[:] = False
         assert cnt[i] == keep.sum()
         assert np.array_equal(nb[o:o + cnt[i]], row[keep])
+    # the position form (uint16 positions in the list row) lists the same neighbours, and
+    # the density-gradient pass emits the same rows as compact_rows in both forms
+    pos = np.zeros(nl.indices.shape[0], dtype=np.uint16)
+    cnt2 = np.zeros(p.n, dtype=np.int64)
+    passes.compact_rows(p.x, p.kind, nl.offsets, nl.indices, s.R, s.period,
+                        (pos, nl.indices), cnt2)
+    assert np.array_equal(cnt2, cnt)
+    sc, pa = s._scratch, s.params
+    for rows in (np.zeros_like(nl.indices), (np.zeros_like(pos), nl.indices)):
+        cnt3 = np.zeros(p.n, dtype=np.int64)
+        passes.density_gradient(p.x, p.rho, sc.V, p.kind, nl.offsets, nl.indices, s.R,
+                                s.sigma, s.kernel_code, s.period, pa.cond_max, sc.grad, sc.ok,
+                                rows, cnt3)
+        assert np.array_equal(cnt3, cnt)
+        for i in range(p.n):
+            o, c = nl.offsets[i], cnt[i]
+            want = nb[o:o + c]
+            assert np.array_equal(nl.indices[o + pos[o:o + c].astype(np.int64)], want)
+            got = rows[o:o + c] if isinstance(rows, np.ndarray) else (
+                nl.indices[o + rows[0][o:o + c].astype(np.int64)])
+            assert np.array_equal(got, want)
