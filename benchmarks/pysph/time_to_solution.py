@@ -37,8 +37,10 @@ End times: PySPH's ``dam_break_2d`` (1.0b2, as shipped, OpenMP or serial build) 
 segmentation fault at t ~ 0.94 s of its tf = 2.5 s here (its step falls from 1.8e-4 to
 ~3e-5 s once the surge has hit the right wall at t ~ 0.71 s; the same crash at 36 % of tf
 is pypr/pysph issue 384), so the 2D comparison stops at t = 0.76 s (T = 3.37: every
-experimental point).  Its ``dam_break_3d`` takes hours to its tf = 6 s ("14 hours" in its
-docstring); the 3D comparison runs to a stated shorter time past the obstacle impact.
+experimental point).  At dx = 0.01 it crashes earlier, at t ~ 0.41 s, its step collapsing
+from t ~ 0.37 s (during the surge, before any wall impact).  Its ``dam_break_3d`` takes
+hours to its tf = 6 s ("14 hours" in its docstring); the 3D comparison runs to a stated
+shorter time past the obstacle impact.
 
 Threads: ``--threads`` for both codes (``OMP_NUM_THREADS`` / ``NUMBA_NUM_THREADS``; ours
 also ``FluidParams.threads``, ``--ours-threads 0`` for the automatic choice).  Both
