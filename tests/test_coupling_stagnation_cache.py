@@ -33,3 +33,15 @@ def test_profile_read_back_equals_the_solve(tmp_path, monkeypatch):
     finally:
         sl.stagnation_profile.cache_clear()
         sl._tables.cache_clear()
+
+
+def test_steady_nusselt_trapezoid_equals_scipy():
+    """steady_nusselt's cumulative trapezoid (numpy, without importing scipy.integrate)
+    is scipy.integrate.cumulative_trapezoid bit for bit."""
+    from scipy.integrate import cumulative_trapezoid
+
+    eta, f, _ = sl.stagnation_profile(2)
+    ours = np.concatenate([[0.0], np.cumsum(np.diff(eta) * (f[1:] + f[:-1]) / 2.0)])
+    assert np.array_equal(ours, cumulative_trapezoid(f, eta, initial=0.0))
+    # Homann, Pr = 1: Nu / sqrt(Re) = 0.763 (Sibulkin 1952, axisymmetric stagnation point)
+    assert abs(sl.steady_nusselt(1.0, 2) - 0.763) < 2e-3
