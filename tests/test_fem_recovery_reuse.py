@@ -100,3 +100,24 @@ def test_linear_stress_maps_equal_the_quadrature_path(element, with_dT):
         Sq = other.stress_qp
         full = np.moveaxis((Sq * w).sum(axis=-1) / w.sum(axis=-1), -1, 0)
         assert np.array_equal(other.stress_elem, full)
+
+
+def test_probe_locations_kept():
+    """A second probe of the same points uses the kept cells and reference coordinates:
+    the same answer bit for bit, and the kept arrays do not change when the returned ones
+    are written to; points outside the mesh still raise."""
+    sub = substrate()
+    res = sub.solve(dT_nodal=field(sub.mesh.p))
+    X = np.array([[0.0, -1e-9], [1e-4, -5e-6], [3e-4, -2e-4]])
+    a = res.probe(X)
+    cells, pts = sub._locate(X.T)
+    cells[:] = 0
+    pts[:] = 0.0
+    b = res.probe(X)
+    for k in ("u", "stress", "von_mises", "dT"):
+        assert np.array_equal(a[k], b[k])
+    sub.__dict__["_located"].clear()
+    c = res.probe(X)
+    assert all(np.array_equal(a[k], c[k]) for k in a)
+    with pytest.raises(ValueError, match="outside"):
+        sub._locate(np.array([[2e-3], [0.0]]))

@@ -648,7 +648,24 @@ class FEMSubstrate(QuasiStaticSubstrate):
                              shape=(self.dim * n, b.N)).tocsr()
 
     def _locate(self, X: np.ndarray):
-        """Element and reference coordinates of points X (dim, n)."""
+        """Element and reference coordinates of points X (dim, n); the last few answers for
+        up to 4096 points kept (the coupling's probes are located twice per solve, at
+        every solve)."""
+        X = np.asarray(X, float)
+        small = X.shape[1] <= 4096
+        key = (X.shape, X.tobytes()) if small else None
+        cache = self.__dict__.setdefault("_located", {})
+        if key in cache:
+            cells, pts = cache[key]
+            return cells.copy(), pts.copy()
+        cells, pts = self._find(X)
+        if small:
+            if len(cache) >= 4:
+                cache.pop(next(iter(cache)))
+            cache[key] = (cells.copy(), pts.copy())
+        return cells, pts
+
+    def _find(self, X: np.ndarray):
         try:
             if isinstance(self.mesh, (MeshTet1, MeshTri1)):
                 cells = _find_simplices(self.mesh, self.basis.mapping, X)
