@@ -5,9 +5,10 @@ A scene whose only list user is the fluid gets the list built with the fluid's p
 (no unfiltered list, no filtered copy), and the fluid's compacted rows share the search's
 work buffer (:func:`sphfem.neighbors.work_buffer`).  Before, the run held the unfiltered
 list (4 B per listed pair), the fluid's filtered copy (4 B per kept pair) and a work buffer
-of 1.25 x the unfiltered list (5 B), besides the search's own scratch: ~23 B per kept pair
-on this scene.  Measured with tracemalloc (numpy's allocations), so the figures do not
-depend on the allocator or on other processes.
+of 1.25 x the unfiltered list (5 B), besides the search's own scratch: on this scene 12.0 B
+per unfiltered pair, 19.8 B per kept pair (measured on 473bdbc).  Measured with
+tracemalloc (numpy's allocations), so the figures do not depend on the allocator or on
+other processes.
 """
 
 import sys
@@ -38,7 +39,7 @@ def test_fluid_scene_holds_one_list_and_one_work_buffer(tmp_path):
     beyond the per-particle arrays is at most 4 B (the list) + 4.5 B (one work buffer: the
     search's scratch or the 2 B compacted rows, with 1/8 headroom) + 1.5 B (small objects)
     per listed pair (measured 8.2), and the peak adds at most the output writer's copy of
-    the fields on top; the old hand-over held ~23 B per kept pair."""
+    the fields on top; the old hand-over held 19.8 B per kept pair."""
     scene = parse_scene(dambreak(20_000), source="<memory test>")
     Simulation(scene)  # warm-up: numba kernels loaded, the work buffer allocated once
     from sphfem import neighbors
@@ -54,13 +55,13 @@ def test_fluid_scene_holds_one_list_and_one_work_buffer(tmp_path):
     pairs = sim.nbrs.n_pairs
     n = sim.particles.n
     assert sim.step_count == 3 and np.count_nonzero(sim.particles.kind == FLUID) > 15_000
+    per_pair = (held - _per_particle_bytes(sim)) / pairs
+    assert per_pair < 4.0 + 4.5 + 1.5, per_pair
     # the list is the fluid's view: fluid rows keep fluid and wall neighbours, wall rows
     # their fluid neighbours only (wall-wall pairs are not listed)
     kind = sim.particles.kind
     rows = np.repeat(np.arange(n), np.diff(sim.nbrs.offsets))
     assert np.all(kind[sim.nbrs.indices][kind[rows] != FLUID] == FLUID)
-    per_pair = (held - _per_particle_bytes(sim)) / pairs
-    assert per_pair < 4.0 + 4.5 + 1.5, per_pair
     # the peak: the held memory plus transients no larger than the fields' size (the VTU
     # writer's float64 copy of every field, the first list's cell sort)
     fields = sum(a.nbytes for a in sim.particles.fields.values())
