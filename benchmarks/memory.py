@@ -25,6 +25,7 @@ allocates and keeps) and, between two sizes of one scene, the slope of the peak
     python benchmarks/memory.py dambreak --n 20000 100000 [--heat] [--steps 3]
     python benchmarks/memory.py dambreak --n 1000000 --steps 3
     python benchmarks/memory.py examples/droplet_impact/droplet_impact.toml --scale 1.5 1.0
+    python benchmarks/memory.py forms --n 20000 100000 --repeat 11   # compacted-row forms
 """
 
 from __future__ import annotations
@@ -122,6 +123,67 @@ def _child(job: str) -> int:
     return 0
 
 
+def compare_forms(n_fluid: int, repeats: int) -> None:
+    """Seconds of the density-gradient and force passes with the compacted rows in the
+    index form (int32, 4 B per listed pair) and the position form (uint16 positions in the
+    list row, 2 B; what the solver uses), interleaved in one process, after 3 steps of the
+    dam break; checks that both give the same accelerations and density rates."""
+    import time
+
+    import numpy as np
+
+    from sphfem.fluid import passes
+    from sphfem.scene import parse_scene
+    from sphfem.simulation import Simulation
+
+    sim = Simulation(parse_scene(dambreak(n_fluid), source="<memory benchmark>"))
+    for _ in range(3):
+        sim.step(sim.stable_dt()[0])
+    fl = sim.modules[0].solver
+    p, s, pa, nl = fl.p, fl._scratch, fl.params, fl.nbrs
+    g = fl.body_force(fl.t)
+    forms = {"index": np.empty_like(nl.indices),
+             "position": (np.empty(nl.indices.shape[0], np.uint16), nl.indices)}
+
+    def run(nb):
+        t0 = time.perf_counter()
+        passes.density_gradient(p.x, p.rho, s.V, p.kind, nl.offsets, nl.indices, fl.R,
+                                fl.sigma, fl.kernel_code, fl.period, pa.cond_max, s.grad,
+                                s.ok, nb, s.cnt)
+        t1 = time.perf_counter()
+        passes.fluid_forces(s.P, p.kind, nl.offsets, s.cnt, nb, fl.R, fl.sigma,
+                            fl.kernel_code, fl.period, g, pa.eps_visc * fl.h**2,
+                            pa.delta * fl.h * pa.c0, pa.alpha * fl.h * pa.c0, p.acc, p.drho,
+                            p.f_fluid)
+        return t1 - t0, time.perf_counter() - t1, p.acc.copy(), p.drho.copy()
+
+    times = {k: [] for k in forms}
+    out = {}
+    for nb in forms.values():
+        run(nb)  # compile / warm up
+    for _ in range(repeats):
+        for k, nb in forms.items():
+            a, b, acc, drho = run(nb)
+            times[k].append((a, b))
+            out[k] = (acc, drho)
+    same = all(np.array_equal(x, y) for x, y in zip(out["index"], out["position"],
+                                                     strict=True))
+    print(f"{p.n} particles, {nl.n_pairs} listed pairs, {repeats} repeats, "
+          f"{numba_threads()} threads; index and position forms give identical results: "
+          f"{same}")
+    for k, t in times.items():
+        t = np.asarray(t) * 1e3
+        print(f"  {k:8s} density gradient min {t[:, 0].min():7.1f} median "
+              f"{np.median(t[:, 0]):7.1f} ms; forces min {t[:, 1].min():7.1f} median "
+              f"{np.median(t[:, 1]):7.1f} ms")
+
+
+def numba_threads() -> int:
+    import numba
+
+    return numba.get_num_threads()
+
+
 def measure(job: dict) -> dict:
     with tempfile.TemporaryDirectory(prefix="sphfem-mem-") as tmp:
         job = dict(job, out=str(Path(tmp) / "out"))
@@ -153,15 +215,21 @@ def report(r: dict, label: str) -> None:
 
 def main(argv=None) -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    p.add_argument("scene", help="'dambreak' or a scene file")
+    p.add_argument("scene", help="'dambreak', a scene file, or 'forms' (seconds of the "
+                                 "fluid passes with either form of the compacted rows)")
     p.add_argument("--n", type=float, nargs="+", default=[2e4, 1e5],
                    help="dambreak: fluid particle counts")
     p.add_argument("--scale", type=float, nargs="+", default=[1.0],
                    help="scene file: resolution factors (>1 coarser)")
     p.add_argument("--heat", action="store_true", help="dambreak: modules fluid + heat")
     p.add_argument("--steps", type=int, default=3)
+    p.add_argument("--repeat", type=int, default=11, help="forms: interleaved repeats")
     p.add_argument("--json", type=Path)
     a = p.parse_args(argv)
+    if a.scene == "forms":
+        for n in a.n:
+            compare_forms(int(n), a.repeat)
+        return 0
     runs = []
     if a.scene == "dambreak":
         for n in a.n:
