@@ -122,15 +122,19 @@ def figures(summary: dict, speed: float, diameter: float) -> dict:
     sp = fl["spreading"]
     mat = summary["scene"]["materials"][summary["scene"]["coupling"]["material"]]
     wagner = [r / math.sqrt(6.0 * (t - t_contact) / tc)
-              for t, r in zip(sp["history_t_s"], sp["history_ratio"], strict=True)
+              for t, r in zip(sp.get("history_t_s", ()), sp.get("history_ratio", ()),
+                              strict=True)
               if T_WAGNER[0] <= (t - t_contact) / tc <= T_WAGNER[1]]
     fluid = next(b for b in summary["scene"]["blocks"] if b["kind"] == "fluid")
     fmat = summary["scene"]["materials"][fluid["material"]]
     from sphfem.fluid.spreading import correlation_table, reynolds, weber
 
-    We = weber(fmat["rho0"], speed, diameter, fmat["sigma"])
-    Re = reynolds(fmat["rho0"], speed, diameter, fmat["mu"])
-    band = list(correlation_table(We, Re, 90.0).values())
+    We = Re = math.nan
+    band = [math.nan]
+    if fmat.get("sigma") and fmat.get("mu"):  # the correlations need both
+        We = weber(fmat["rho0"], speed, diameter, fmat["sigma"])
+        Re = reynolds(fmat["rho0"], speed, diameter, fmat["mu"])
+        band = list(correlation_table(We, Re, 90.0).values())
     dx = float(fluid.get("dx") or summary["scene"]["sph"]["dx"])
     # a surface held at the ideal contact rise over a spot wider than the heated depth is in
     # equal biaxial constraint: s_rr = s_tt = -E alpha dT / (1 - nu), s_zz = 0, so its von
