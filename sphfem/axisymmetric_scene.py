@@ -264,6 +264,8 @@ class AxisymmetricFluidModule(PhysicsModule):
         self.t_breach = None
         #: the first time a fluid ring was outside the domain box (None: never)
         self.t_escape = None
+        #: the domain box's corners
+        self._domain = (np.asarray(scene.domain.lo, float), np.asarray(scene.domain.hi, float))
 
     def fields(self):
         f = np.float64
@@ -379,9 +381,9 @@ class AxisymmetricFluidModule(PhysicsModule):
                                     f"went through the wall ({depth:.2f} dx below its top, "
                                     f"the wall is {self.wall_depth:.2f} dx thick)")
         if self.t_escape is None:
-            lo, hi = self.scene.domain.lo, self.scene.domain.hi
+            lo, hi = self._domain
             xf = s.x[s.fluid]
-            if ((xf < np.asarray(lo)) | (xf > np.asarray(hi))).any():
+            if ((xf < lo) | (xf > hi)).any():
                 self.t_escape = ctx.t + dt
                 logger.warning("axisymmetric fluid: a ring left the domain box at t = %g s "
                                "(it flies on; counted in summary.json, fluid."
@@ -480,7 +482,7 @@ class AxisymmetricFluidModule(PhysicsModule):
              "neighbor_lists": {"built": s.list_builds, "reused": s.list_reuses}}
         # rings outside the domain box fly on (no outflow boundary): their number, mass
         # fraction and the first time, so a splash that left the region is visible
-        lo, hi = np.asarray(self.scene.domain.lo), np.asarray(self.scene.domain.hi)
+        lo, hi = self._domain
         out = fl & ((ps.x < lo) | (ps.x > hi)).any(axis=1)
         d["rings_outside_domain"] = {"count": int(out.sum()),
                                      "mass_fraction": float(ps.m[out].sum() / ps.m[fl].sum()),

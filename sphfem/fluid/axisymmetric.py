@@ -96,7 +96,11 @@ from numba import njit, prange
 
 from sphfem import kernels
 from sphfem.axisymmetric import MIRROR_FLUID, MIRROR_WALL  # noqa: F401  (re-exported)
-from sphfem.fluid.axisymmetric_surface_tension import AxisymmetricCSF
+from sphfem.fluid.axisymmetric_surface_tension import (
+    AxisymmetricCSF,
+    mirror_normals,
+    mirror_scalar,
+)
 from sphfem.fluid.eos import tait_B, tait_density, tait_pressure
 from sphfem.fluid.no_penetration import NoPenetration
 from sphfem.fluid.wcsph import FluidParams
@@ -576,6 +580,8 @@ class AxisymmetricFluid:
         self.fw = np.ones(n)
         #: squared shear thickness of each fluid row's wall layer [m^2] (< 0: none)
         self.delta2 = np.full(n, -1.0)
+        #: the layer equation's inputs from the last evaluation (``wall_friction = "layer"``)
+        self._layer = None
         if wall_friction == "layer":
             if self.wall_normals is None or not wl.any():
                 raise ValueError("wall_friction = 'layer' needs wall particles with wall "
@@ -732,7 +738,9 @@ class AxisymmetricFluid:
         acc = np.zeros((m, 2))
         drho = np.zeros(m)
         gradv = np.zeros((m, 4))
-        fw = self._augmented_rows(self.fw, src, 1.0)
+        fw = np.ones(m)
+        fw[:n] = self.fw
+        mirror_scalar(n, src, fw)
         wall_art = 1.0 if self.wall_friction == "sph" else 0.0
         forces(x, v, vg, vd, rho, p, A, mt, mu, kind, gr, dvdr, nl.offsets, nl.indices, Rp,
                self.s2, self.kcode, self.Lz, self.gravity, pa.eps_visc, pa.delta * pa.c0,
@@ -760,16 +768,6 @@ class AxisymmetricFluid:
         self.lam = Bm[:n, 4].copy()
         self.wall_s["forces"] += time.perf_counter() - t1
 
-    def _augmented_rows(self, a, src, fill: float):
-        """A per-row array over the augmented set: the real rows', each axis mirror its
-        source's (wall-plane images: ``fill``)."""
-        n = self.n
-        out = np.full(n + src.shape[0], fill)
-        out[:n] = a
-        real = src < n
-        out[n:][real] = a[src[real]]
-        return out
-
     def _layer_inputs(self, x, kind, nl, Rp, src, mtype, gradv, qh) -> None:
         """The band, wall normals and surface divergence of the fluid rows
         (:mod:`sphfem.fluid.wall_layer`, eq. 2) from this evaluation."""
@@ -778,9 +776,7 @@ class AxisymmetricFluid:
         n = self.n
         nrm = np.zeros((x.shape[0], 2))
         nrm[:n] = np.where((self.kind == WALL)[:, None], self.wall_normals, 0.0)
-        q = np.flatnonzero((src < n) & (mtype == 0))
-        nrm[n + q, 0] = -nrm[src[q], 0]
-        nrm[n + q, 1] = nrm[src[q], 1]
+        mirror_normals(n, src, mtype, nrm, np.zeros(x.shape[0]))
         bn = np.zeros((n, 2))
         band = np.zeros(n, np.int8)
         band_normals(x, kind, nl.offsets, nl.indices, Rp, nrm, self.kcode, n, bn, band)
@@ -846,7 +842,7 @@ class AxisymmetricFluid:
         """Predictor-corrector position Verlet (:mod:`sphfem.fluid.wcsph`); particles that
         cross the axis are reflected."""
         fl = self.fluid
-        if self.wall_friction == "layer" and getattr(self, "_layer", None) is not None:
+        if self._layer is not None:
             self._advance_layer(dt)
         v_n = self.v[fl].copy()
         rho_n = self.rho[fl].copy()

@@ -55,19 +55,24 @@ __all__ = ["integrate_layer", "layer_J", "outer_strain", "stagnation_profile",
 _ETA_MAX = 12.0
 
 
+def _table_key(c: int) -> dict:
+    """What the on-disk tables of flow ``c`` depend on (the recipe and the library
+    versions that computed them)."""
+    import scipy
+
+    return {"c": int(c), "eta_max": _ETA_MAX, "recipe": 1, "numpy": np.__version__,
+            "scipy": scipy.__version__}
+
+
 @functools.lru_cache(maxsize=4)
 def stagnation_profile(c: int):
     """(eta, f, f'') on [0, 12] of eq. (1) (c = 1 Hiemenz, c = 2 Homann), by scipy's
     solve_bvp to 1e-10; beyond eta = 12, f = eta - beta (beta = eta - f there).  Kept on
     disk (:func:`sphfem.cache.cached_array`, key: c and the numpy / scipy versions): the
     solve takes ~0.8 CPU-s, the first coupling step of every strained-viscous run."""
-    import scipy
-
     from sphfem.cache import cached_array
 
-    table = cached_array("stagnation_profile", {"c": int(c), "eta_max": _ETA_MAX, "recipe": 1,
-                                                "numpy": np.__version__,
-                                                "scipy": scipy.__version__},
+    table = cached_array("stagnation_profile", _table_key(c),
                          lambda: np.stack(_solve_profile(c)))
     return table[0], table[1], table[2]
 
@@ -106,14 +111,10 @@ def _tables(c: int):
     beta = float(eta[-1] - f[-1])
     # J(sigma) on a log grid: quadrature on the table, then the tail f = eta - beta exactly
     # (kept on disk as the profile: 0.4 CPU-s)
-    import scipy
-
     from sphfem.cache import cached_array
 
     sig = np.logspace(-4, 4, 801)
-    J = cached_array("stagnation_J", {"c": int(c), "eta_max": _ETA_MAX, "recipe": 1,
-                                      "numpy": np.__version__, "scipy": scipy.__version__},
-                     lambda: _J_table(eta, f, beta, sig))
+    J = cached_array("stagnation_J", _table_key(c), lambda: _J_table(eta, f, beta, sig))
     # lambda f(lambda) for the inversion of eq. (3)
     lam = eta[1:]
     P = lam * f[1:]
