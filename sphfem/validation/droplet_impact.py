@@ -103,6 +103,11 @@ def scene_at(speed: float, per_diameter: int, t_end_tc: float) -> dict:
     d["time"]["t_end"] = f"{t_end_tc} tc"
     d["output"]["every"] = f"{t_end_tc / 4} tc"
     d["scene"]["name"] = f"droplet_impact_axi_V{speed:g}_D{per_diameter}"
+    # the SPH wall one kernel support deep at every level (the packaged scene's 3 dx): deeper
+    # rows have no fluid neighbour (the substrate's heat and stress are the FEM's), and a
+    # fixed depth would carry 8 rows at D/dx 64, 24 at 128 (60 % of the particles there)
+    wall = next(b for b in d["blocks"] if b["kind"] == "wall")
+    wall["lo"][-1] = wall["hi"][-1] - d["sph"]["support_factor"] * d["sph"]["dx"]
     return d
 
 
