@@ -1,12 +1,15 @@
 """One level of the droplet-impact validation scene with overrides (the runs of the
 wall-friction study in docs/validation/droplet_impact/README.md, session 9).
 
-    python examples/droplet_impact/level_run.py V N T_END_TC OUT [--wall-radius R] [key=value ...]
+    python examples/droplet_impact/level_run.py V N T_END_TC OUT [--wall-radius R] [--resume]
+                                                [key=value ...]
 
 V the impact speed [m/s] (c0 = 10 V), N particles across the droplet, T_END_TC the end time in
 t_c = D / V; ``--wall-radius`` widens the SPH wall, the domain and the lateral heat refinement
 to r = R [m] (the packaged scene: 0.3 mm); ``section.key=value`` overrides a scene key, e.g.
-``fluid.wall_friction=layer`` or ``fluid.alpha=0.01``.  Prints the validation's figures of the
+``fluid.wall_friction=layer`` or ``fluid.alpha=0.01``; ``--resume`` continues from OUT's
+checkpoint when there is one (the run writes one at every output; without the flag an
+existing OUT is overwritten).  Prints the validation's figures of the
 run (:func:`sphfem.validation.droplet_impact.figures`).
 """
 
@@ -25,6 +28,7 @@ def main(argv=None) -> None:
     ap.add_argument("t_end_tc", type=float)
     ap.add_argument("out", type=Path)
     ap.add_argument("--wall-radius", type=float, default=None)
+    ap.add_argument("--resume", action="store_true")
     ap.add_argument("overrides", nargs="*", help="section.key=value")
     a = ap.parse_intermixed_args(argv)
 
@@ -49,7 +53,8 @@ def main(argv=None) -> None:
             node = node.setdefault(k, {})
         node[last] = value
     scene = parse_scene(d, source=f"level_run V={a.speed:g} D/dx={a.per_diameter}")
-    run(scene, a.out, overwrite=True)
+    resume = a.resume and (a.out / "checkpoint.npz").exists()
+    run(scene, a.out, resume=resume, overwrite=not resume)
     summary = json.loads((a.out / "summary.json").read_text())
     drop = next(b for b in d["blocks"] if b["kind"] == "fluid")
     print(json.dumps(di.figures(summary, a.speed, 2.0 * drop["radius"]), default=str, indent=1))
