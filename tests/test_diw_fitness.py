@@ -147,7 +147,7 @@ def test_bead_on_the_path_scores_zero_whatever_its_width(half_rows):
     assert f["max_dev_D"] == pytest.approx(half_rows * dx / D, rel=1e-12)
     assert f["width_nominal_D"] == pytest.approx(2 * half_rows * dx / D, rel=1e-12)
     for key in ("centre_dev_max_D", "centre_dev_mean_D", "edge_dev_max_D",
-                "edge_dev_mean_D", "edge"):
+                "edge_dev_mean_D", "edge", "centre"):
         assert f[key] == pytest.approx(0.0, abs=1e-12), key
     assert f["objective"] == f["edge"]
 
@@ -213,6 +213,46 @@ def test_gap_is_a_shortfall_of_half_its_length():
     f = deposit_fitness(pos, H, D, line)
     short = f["edge_short_max_D"] * D
     assert hole / 2 - H - H / 4 - 1e-12 <= short <= hole / 2 - H + 1e-12
+
+
+@pytest.mark.parametrize("p", [1.0, 8.0, 64.0])
+def test_centre_objective_of_an_offset_bead_is_its_offset(p):
+    """The 3-row bead shifted by e = 3 h: every station's centreline is e, so the power
+    mean (1/N sum (c_k/h)^p)^(1/p) is e / h for any p, and equals the maximum."""
+    L, dx, e = 5e-3, H, 3 * H
+    line = DesiredPath([Line((0.0, 0.0), (L, 0.0))])
+    pos = bead_on_line(L, [-dx, 0.0, dx], dx, y0=e)
+    f = deposit_fitness(pos, H, D, line, objective="centre", centre_p=p)
+    assert f["objective"] == f["centre"]
+    assert f["centre"] == pytest.approx(e / H, rel=1e-9)
+    assert f["centre"] == pytest.approx(f["centre_dev_max_D"] * D / H, rel=1e-9)
+
+
+@pytest.mark.parametrize("p", [1.0, 2.0, 8.0, 200.0])
+def test_centre_objective_of_one_displaced_station(p):
+    """A 3-row bead on a 5 mm line whose particles in station 3 of N = ceil(L/D) = 8
+    (x in [3, 4) L/N) are shifted by e across the path: the centreline is e there and 0
+    elsewhere, so centre_dev_max = e, centre_dev_mean = e/N and the objective is the power
+    mean (e/h) N^(-1/p), which tends to the maximum e/h as p grows."""
+    L, dx, e = 5e-3, H, 2.5 * H
+    line = DesiredPath([Line((0.0, 0.0), (L, 0.0))])
+    n = math.ceil(L / D)
+    pos = bead_on_line(L, [-dx, 0.0, dx], dx)
+    station = (pos[:, 0] >= 3 * L / n + 1e-12) & (pos[:, 0] < 4 * L / n - 1e-12)
+    assert station.sum() > 0
+    pos[station, 1] += e
+    f = deposit_fitness(pos, H, D, line, objective="centre", centre_p=p)
+    assert f["width_nominal_D"] == pytest.approx(2 * dx / D, rel=1e-9)
+    assert f["centre_dev_max_D"] == pytest.approx(e / D, rel=1e-9)
+    assert f["centre_dev_mean_D"] == pytest.approx(e / (n * D), rel=1e-9)
+    assert f["objective"] == pytest.approx(e / H * n ** (-1.0 / p), rel=1e-9)
+    assert f["objective"] <= e / H
+
+
+def test_centre_objective_p_below_one_raises():
+    line = DesiredPath([Line((0.0, 0.0), (1e-3, 0.0))])
+    with pytest.raises(ValueError, match="centre_p"):
+        deposit_fitness(np.zeros((1, 3)), H, D, line, objective="centre", centre_p=0.5)
 
 
 def test_unknown_objective_raises():

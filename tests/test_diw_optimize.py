@@ -214,6 +214,28 @@ def test_edge_objective_is_part_of_the_job(tmp_path):
     assert res["objective"] == res["edge"] != res["thesis"]
 
 
+def test_centre_objective_is_part_of_the_job(tmp_path):
+    """[optimize] objective = "centre" and centre_p reach the job and its evaluations (the
+    objective is the fitness' centre term) and change the hash; centre_p does not enter the
+    hash of a job with another objective (existing caches stay valid)."""
+    from sphfem.diw.job import load_job
+
+    a = ToolpathJob("bend90", 0.1, 7e-4, 1e-4, scene_text="[scene]\nname = 'a'\n")
+    e = dataclasses.replace(a, objective="edge")
+    assert "centre_p" not in a.describe() and "centre_p" not in e.describe()
+    assert job_hash(dataclasses.replace(e, centre_p=4.0).describe()) == job_hash(e.describe())
+    c = dataclasses.replace(a, objective="centre")
+    assert job_hash(c.describe()) not in (job_hash(a.describe()), job_hash(e.describe()))
+    assert job_hash(dataclasses.replace(c, centre_p=4.0).describe()) != job_hash(c.describe())
+    scene = _lag_scene(tmp_path, 0.0)
+    scene.write_text(scene.read_text() + 'objective = "centre"\ncentre_p = 4.0\n')
+    job, opt, _ = load_job(scene)
+    assert (job.objective, job.centre_p, opt.centre_p) == ("centre", 4.0, 4.0)
+    res = job(job.space.naive())
+    assert res["objective"] == res["centre"] > 0
+    assert res["centre"] <= res["centre_dev_max_D"] * job.nozzle_diameter / res["h"]
+
+
 def _lag_scene(tmp_path, cost):
     text = (ROOT / "examples/diw/line_reduced.toml").read_text()
     text = text.replace('toolpath = "line"', 'toolpath = "bend90"')

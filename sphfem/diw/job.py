@@ -42,6 +42,7 @@ class ToolpathJob:
     evaluator: str = "lag-model"
     gap_weight: float = 0.0
     objective: str = "thesis"
+    centre_p: float = 8.0
     lag_time: float = 0.01
     lag_damping: float = 0.3
     lag_cost: float = 0.0
@@ -65,6 +66,8 @@ class ToolpathJob:
         d = asdict(self)
         d.pop("source")
         d.pop("lag_cost")  # a sleep: changes the time an evaluation takes, not its result
+        if d["objective"] != "centre":
+            d.pop("centre_p")  # only the centre objective reads it
         if d["objective"] == "thesis":
             d.pop("objective")  # the default: the hashes of earlier jobs stay valid
         scene = d.pop("scene_text")
@@ -106,7 +109,8 @@ class ToolpathJob:
         if info.get("stopped_reason"):
             raise EvaluationFailed(f"simulation stopped: {info['stopped_reason']}")
         res = deposit_fitness(dep.positions, dep.h, dep.nozzle_diameter, self.desired,
-                              gap_weight=self.gap_weight, objective=self.objective)
+                              gap_weight=self.gap_weight, objective=self.objective,
+                              centre_p=self.centre_p)
         res["info"] = {k: v for k, v in info.items() if isinstance(v, (int, float, str))}
         if getattr(dep, "vtu", None):
             res["vtu"] = str(dep.vtu)
@@ -138,7 +142,8 @@ def load_job(path, **overrides) -> tuple[ToolpathJob, object, object]:
     job = ToolpathJob(
         case=ext.toolpath, speed=ext.nozzle_speed, nozzle_diameter=ext.nozzle_diameter,
         h=scene.sph.dx, leg=opt.leg, radius=opt.radius, evaluator=opt.evaluator,
-        gap_weight=opt.gap_weight, objective=opt.objective, lag_time=opt.lag_time,
+        gap_weight=opt.gap_weight, objective=opt.objective, centre_p=opt.centre_p,
+        lag_time=opt.lag_time,
         lag_damping=opt.lag_damping, lag_cost=opt.lag_cost, scene_text=text, source=str(path))
     try:
         job.space  # noqa: B018  (an unknown case name is a scene error)

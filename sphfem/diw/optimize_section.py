@@ -25,11 +25,17 @@ OPTIMIZE = register_section(Section("optimize", (
     Param("c2", float, 1.49618, ge=0.0, doc="PSO social coefficient C2 (global best)"),
     Param("reseed", int, None, ge=0, default_doc="population // 10 (at least 1)",
           doc="PSO: members with the poorest fitness re-seeded at random each iteration (M)"),
-    Param("objective", str, "thesis", choices=("thesis", "edge"),
+    Param("objective", str, "thesis", choices=("thesis", "edge", "centre"),
           doc="what is minimised: thesis = sum (dist/h)^3 over the deposit (eq. 3.47; dist "
               "includes the bead's half-width); edge = the same form over the distances "
               "beyond the desired bead of the deposit's own width (particles outside its "
-              "edges, points of its edges and centreline left uncovered; sphfem.diw.fitness)"),
+              "edges, points of its edges and centreline left uncovered); centre = the "
+              "power mean (1/N sum_k (c_k/h)^p)^(1/p) of the bead's centreline offsets c_k "
+              "in stations one D long, a smooth stand-in for their maximum "
+              "(sphfem.diw.fitness)"),
+    Param("centre_p", float, 8.0, ge=1.0,
+          doc="exponent p of the centre objective's power mean: 1 = the mean centreline "
+              "offset, larger p -> its maximum over the stations"),
     Param("gap_weight", float, 0.0, ge=0.0,
           doc="objective = thesis or edge + gap_weight sum (gap/h)^3 over the stretches "
               "of the path the bead leaves uncovered (0: none)"),

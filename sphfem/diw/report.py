@@ -81,7 +81,8 @@ def write_report(out, job, history, best_x, finals: dict) -> list[Path]:
     files = []
     if history:
         label = {"thesis": "objective (thesis eq. 3.47)",
-                 "edge": "objective (edge: beyond the desired bead)"}
+                 "edge": "objective (edge: beyond the desired bead)",
+                 "centre": "objective (centre: power mean of centreline / h)"}
         plot_history(history, out / "fitness_history.png", title=f"{job.case}: fitness",
                      ylabel=label.get(getattr(job, "objective", "thesis"), "objective"))
         files.append(out / "fitness_history.png")
