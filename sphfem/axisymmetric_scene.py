@@ -67,6 +67,7 @@ from scipy.spatial import cKDTree
 
 from sphfem import kernels
 from sphfem.fluid.axisymmetric import MIRROR_FLUID
+from sphfem.fluid.spreading import MIN_FILM_PARTICLES, residual_film
 from sphfem.neighbors import build_neighbor_list
 from sphfem.particles import FLUID, GHOST, WALL, ParticleSet
 from sphfem.physics import PhysicsModule
@@ -316,10 +317,35 @@ class AxisymmetricFluidModule(PhysicsModule):
         #: the spread diameter is sampled every 0.02 D0 / V0 (V0: the fastest ring now)
         v0 = float(np.sqrt((ps.v[ps.kind == FLUID] ** 2).sum(axis=1)).max(initial=0.0))
         self.spread_every = 0.02 * self.D0 / v0 if v0 > 0 else 0.0
+        # the impact speed from the scene (a resumed run's rings are slower by now)
+        v_imp = max((float(np.linalg.norm(b.velocity)) for b in self.scene.blocks
+                     if b.kind == "fluid" and b.shape == "sphere" and b.velocity is not None),
+                    default=0.0)
+        self.film = self._residual_film(v_imp)
+        if self.film is not None and ctx.step == 0 and (
+                self.film["particles_across"] < MIN_FILM_PARTICLES):
+            logger.warning(
+                "axisymmetric fluid: the residual film of the spreading, h_res = 0.79 D "
+                "Re^-0.4 = %.3g m (Roisman 2009), spans %.2f particles (< %g): the maximum "
+                "spreading and the heat it carries are decided below the spacing (dx <= %.3g "
+                "m resolves it)", self.film["h_res_m"], self.film["particles_across"],
+                MIN_FILM_PARTICLES, self.film["h_res_m"] / MIN_FILM_PARTICLES)
         self._next_spread = ctx.t
         if ctx.step == 0:
             self.mom0, self.impulse, self.t0 = self.momentum(ps), 0.0, ctx.t
         self._write_back(ctx)
+
+    def _residual_film(self, v0: float) -> dict | None:
+        """The residual film of the spreading (:func:`sphfem.fluid.spreading.residual_film`)
+        at impact speed ``v0`` and its particles across (None without a droplet, a speed or
+        a viscosity)."""
+        mu, rho0 = float(self.params.mu), float(self.params.rho0)
+        if not (self.D0 > 0 and v0 > 0 and mu > 0):
+            return None
+        h = residual_film(self.D0, rho0 * v0 * self.D0 / mu)
+        return {"h_res_m": h, "particles_across": h / self.dx,
+                "definition": "h_res = 0.79 D Re^-0.4 (Roisman 2009), Re = rho v D / mu with "
+                              "v the droplet block's speed"}
 
     def _write_back(self, ctx) -> None:
         s, ps, idx = self.solver, ctx.particles, self.idx
@@ -496,6 +522,8 @@ class AxisymmetricFluidModule(PhysicsModule):
                 factor_max=float(s.fw[band].max()) if band.any() else 1.0,
                 shear_thickness_median_m=(float(np.sqrt(np.median(s.delta2[band])))
                                           if band.any() else None))
+        if self.film is not None:
+            d["residual_film"] = self.film
         if self.D0 > 0 and len(sp):
             k = int(np.argmax(sp[:, 1]))
             d["spreading"] = {

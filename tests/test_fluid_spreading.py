@@ -149,6 +149,16 @@ def test_disc_spread_ratio_by_hand():
     assert sp.disc_spread_ratio(1.0 / 54.0) == pytest.approx(6.0, rel=1e-12)
 
 
+def test_residual_film_by_hand_and_bad_input():
+    """h_res = 0.79 D Re^-0.4 (Roisman 2009): water D = 0.1 mm at 10 m/s, Re = 10^4 / 3,
+    by hand 0.79e-4 * (3 / 10^4)^0.4 = 3.0795e-6 m; Re = 1 gives 0.79 D."""
+    assert sp.residual_film(1e-4, 1e4 / 3) == pytest.approx(0.79e-4 * (3e-4) ** 0.4, rel=1e-12)
+    assert sp.residual_film(1e-4, 1e4 / 3) == pytest.approx(3.0795e-6, rel=1e-4)
+    assert sp.residual_film(2.0, 1.0) == pytest.approx(1.58)
+    with pytest.raises(ValueError, match="Re"):
+        sp.residual_film(1e-4, 0.0)
+
+
 def test_link_keeps_the_connected_sheet_and_area_diameter():
     dx = 0.01
     radius = 0.2

@@ -435,3 +435,25 @@ def test_rings_leaving_the_domain_are_counted(tmp_path):
     assert ok["rings_outside_domain"]["count"] == 0
     assert ok["rings_outside_domain"]["t_first_s"] is None
     assert ok["spreading"]["wall_end_reached"] is False
+
+
+def test_residual_film_resolution_reported(tmp_path, caplog):
+    """The summary states how many particles span the spreading's residual film h_res =
+    0.79 D Re^-0.4 (Roisman 2009) at the droplet block's speed, and the run warns below 3."""
+    import logging
+
+    data = droplet_scene(t_end="0.02 tc")
+    drop = next(b for b in data["blocks"] if b["kind"] == "fluid")
+    water = data["materials"][drop["material"]]
+    V, D = abs(drop["velocity"][-1]), 2.0 * drop["radius"]
+    with caplog.at_level(logging.WARNING, logger="sphfem.axisymmetric_scene"):
+        f = run(data, tmp_path)[1]["diagnostics"]["fluid"]["residual_film"]
+    h = 0.79 * D * (water["rho0"] * V * D / water["mu"]) ** -0.4
+    assert f["h_res_m"] == pytest.approx(h, rel=1e-12)
+    assert f["particles_across"] == pytest.approx(h / data["sph"]["dx"], rel=1e-12)
+    assert f["particles_across"] < 3.0 and "residual film" in caplog.text
+    caplog.clear()
+    water["mu"] = 0.3  # Re = 17: h_res = 0.32 D, resolved
+    with caplog.at_level(logging.WARNING, logger="sphfem.axisymmetric_scene"):
+        f = run(data, tmp_path / "viscous")[1]["diagnostics"]["fluid"]["residual_film"]
+    assert f["particles_across"] > 3.0 and "residual film" not in caplog.text

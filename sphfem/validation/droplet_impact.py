@@ -37,7 +37,10 @@ Each figure gets an observed order, a Richardson limit and a GCI error bar
   the run's We and Re, contact angle 90 deg: Pasandideh-Fard 1996, Ukiwe & Kwok 2005, Clanet
   2004, Roisman 2009, Laan 2014) widened by 10 % on each side (their own scatter).  The
   lamella's thickness at maximum spreading in particles, 2 D / (3 beta^2 dx) (the droplet's
-  volume as a disc), is reported: below ~3 the spreading is decided below the spacing.
+  volume as a disc), is reported: below ~3 the spreading is decided below the spacing; so is
+  the residual film the spreading leaves, h_res = 0.79 D Re^-0.4 (Roisman 2009), in
+  particles (the run warns below 3: D/dx >= 3.8 Re^0.4, i.e. 97 / 151 / 185 at 10 / 30 /
+  50 m/s for the packaged water droplet).
 
 Quick mode (``validate all --quick``, inside the test suite): 50 m/s only, D/dx = 16, 20,
 24 to 0.6 t_c: conservation and the contact temperature are gated, the Richardson figures
@@ -151,6 +154,7 @@ def figures(summary: dict, speed: float, diameter: float) -> dict:
         "wagner_ratio": sum(wagner) / len(wagner) if wagner else math.nan,
         "correlations": (min(band), max(band)), "We": We, "Re": Re,
         "lamella_particles": 2.0 * diameter / (3.0 * sp["max_ratio"] ** 2 * dx),
+        "film_particles": fl.get("residual_film", {}).get("particles_across", math.nan),
         "heat": sh["heat_to_substrate_J"], "heat_ideal": sh["ideal_contact_heat_J"],
         "T_impact": sum(rises) / len(rises) if rises else math.nan,
         "T_impact_static": max((abs(r / ideal - 1.0) for r in rises), default=math.nan),
@@ -294,6 +298,8 @@ def droplet_impact(quick: bool) -> CaseResult:
                 max(lo / fin["spread"] - 1.0, fin["spread"] / hi - 1.0, 0.0), TOL_CORRELATIONS)
         notes.append(f"{tag}: lamella at maximum spreading, particles across (2 D / (3 beta^2 "
                      "dx)): " + ", ".join(f"{f['lamella_particles']:.1f}" for f in figs)
+                     + "; residual film 0.79 D Re^-0.4 (Roisman 2009), particles across: "
+                     + ", ".join(f"{f['film_particles']:.1f}" for f in figs)
                      + "; contact diameter / Wagner over "
                      f"[{T_WAGNER[0]}, {T_WAGNER[1]}] t_c: "
                      + ", ".join(f"{f['wagner_ratio']:.3f}" for f in figs)
