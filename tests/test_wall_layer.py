@@ -142,5 +142,6 @@ def test_scene_key_is_axisymmetric_only():
         parse_scene(d, source="3d")
     ax = tomllib.loads(resources.files("sphfem.scenes").joinpath(
         "droplet_impact_axisymmetric.toml").read_text())
-    ax["fluid"]["wall_friction"] = "layer"
-    assert parse_scene(ax, source="axisymmetric").fluid.wall_friction == "layer"
+    assert parse_scene(ax, source="axisymmetric").fluid.wall_friction == "layer"  # default
+    ax["fluid"]["wall_friction"] = "viscous"
+    assert parse_scene(ax, source="axisymmetric").fluid.wall_friction == "viscous"

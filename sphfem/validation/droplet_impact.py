@@ -61,8 +61,9 @@ from sphfem.validation.richardson import richardson
 SCENE = "droplet_impact_axisymmetric.toml"
 #: impact speeds of the full case [m/s]
 SPEEDS = (10.0, 30.0, 50.0)
-#: particles across the droplet diameter, coarse to fine
-LEVELS_FULL = (16, 32, 45, 64)
+#: particles across the droplet diameter: the rungs the full case picks its three levels
+#: from (ratio sqrt 2), and the quick case's levels
+LADDER = (32, 45, 64, 90, 128, 181, 256, 362)
 LEVELS_QUICK = (16, 20, 24)
 #: end times in t_c (t_c = D / V from t = 0; contact is ~R / V later)
 T_END_FULL, T_END_QUICK = 4.0, 0.6
@@ -87,6 +88,28 @@ def base_scene():
 
     text = resources.files("sphfem").joinpath("scenes", SCENE).read_text()
     return parse_scene_toml(text, source=f"sphfem/scenes/{SCENE}")
+
+
+def levels_for(speed: float, scene=None) -> tuple[int, int, int]:
+    """The full case's three levels at impact speed ``speed`` [m/s]: the finest is the first
+    rung of :data:`LADDER` with at least
+    :data:`~sphfem.fluid.spreading.MIN_FILM_PARTICLES` particles across the residual film
+    h_res = 0.79 D Re^-0.4 (:func:`~sphfem.fluid.spreading.residual_film`), the other two
+    the rungs below it.  Packaged scene: (64, 90, 128) at 10 m/s, (90, 128, 181) at 30,
+    (128, 181, 256) at 50.  ``scene``: a :class:`sphfem.scene.Scene` (default: the
+    packaged one)."""
+    from sphfem.fluid.spreading import MIN_FILM_PARTICLES, residual_film
+
+    d = (scene or base_scene()).to_dict()
+    drop = next(b for b in d["blocks"] if b["kind"] == "fluid")
+    mat = d["materials"][drop["material"]]
+    D = 2.0 * drop["radius"]
+    h = residual_film(D, mat["rho0"] * speed * D / mat["mu"])
+    for k, n in enumerate(LADDER):
+        if k >= 2 and h * n / D >= MIN_FILM_PARTICLES:
+            return LADDER[k - 2], LADDER[k - 1], n
+    raise ValueError(f"droplet-impact: at {speed:g} m/s the residual film ({h:.3g} m) needs "
+                     f"more than D/dx = {LADDER[-1]} for {MIN_FILM_PARTICLES:g} particles")
 
 
 def scene_at(speed: float, per_diameter: int, t_end_tc: float) -> dict:
@@ -239,18 +262,88 @@ def run_one(speed: float, per_diameter: int, t_end_tc: float, out: Path | None =
     return figures(summary, speed, 2.0 * drop["radius"]), t.s
 
 
+def speed_criteria(speed: float, levels, figs: list[dict], quick: bool = False):
+    """The criteria (name -> :class:`Criterion`) and notes of one impact speed from the
+    figures (:func:`figures`) of its ``levels`` (particles across the droplet, coarse to
+    fine); the Richardson figures from all of them (module docstring)."""
+    D = figs[-1]["tc"] * speed
+    hs = [D / n for n in levels]
+    fin = figs[-1]
+    tag = f"{speed:g} m/s"
+    crit: dict[str, Criterion] = {}
+    notes: list[str] = []
+    crit[f"{tag} balance"] = Criterion(
+        f"{tag}: |heat lost by the fluid / heat gained by the substrate - 1| (all levels)",
+        max(f["balance"] for f in figs), TOL_BALANCE)
+    crit[f"{tag} contact T"] = Criterion(
+        f"{tag}, D/dx={levels[-1]}: max |impact-point rise / strained-contact rise - 1| "
+        f"(the run's strain history) over [{T_WINDOW[0]}, {T_WINDOW[1]}] t_c after "
+        "contact", fin["T_impact_dev"], TOL_CONTACT)
+    for key, label in FIGURES.items():
+        est = richardson(hs, [f[key] for f in figs])
+        rel = ((abs(est.finest - est.value) + est.error_bar) / abs(est.value)
+               if est.value else math.inf)
+        order = f"{est.order:.2f}" if est.order is not None else "none"
+        notes.append(f"{tag} {label}: levels {[f'{f[key]:.4g}' for f in figs]}, order "
+                     f"{order}, limit {est.value:.4g} +- {est.error_bar:.2g}"
+                     f"{' (' + est.note + ')' if est.note else ''}")
+        if not quick:
+            crit[f"{tag} {key} converged"] = Criterion(
+                f"{tag}: {label} at D/dx={levels[-1]} within {TOL_CONVERGED:.0%} of the "
+                "Richardson limit, error bar included", rel, TOL_CONVERGED)
+    if not quick:
+        crit[f"{tag} spread max reached"] = Criterion(
+            f"{tag}: time of maximum spreading / end time (< 1: the run goes past it)",
+            fin["spread_t_tc"] * fin["tc"] / fin["t_end"], 0.98)
+        crit[f"{tag} Wagner"] = Criterion(
+            f"{tag}, D/dx={levels[-1]}: |mean contact diameter / Wagner's sqrt(6 t / t_c) "
+            f"- 1| over [{T_WAGNER[0]}, {T_WAGNER[1]}] t_c after contact",
+            abs(fin["wagner_ratio"] - 1.0), TOL_WAGNER)
+        lo, hi = fin["correlations"]
+        crit[f"{tag} correlations"] = Criterion(
+            f"{tag}, D/dx={levels[-1]}: distance of D_max/D = {fin['spread']:.2f} outside "
+            f"the correlations' band [{lo:.2f}, {hi:.2f}] (We {fin['We']:.0f}, Re "
+            f"{fin['Re']:.0f}), relative to the band's edge",
+            max(lo / fin["spread"] - 1.0, fin["spread"] / hi - 1.0, 0.0), TOL_CORRELATIONS)
+    notes.append(f"{tag}: lamella at maximum spreading, particles across (2 D / (3 beta^2 "
+                 "dx)): " + ", ".join(f"{f['lamella_particles']:.1f}" for f in figs)
+                 + "; residual film 0.79 D Re^-0.4 (Roisman 2009), particles across: "
+                 + ", ".join(f"{f['film_particles']:.1f}" for f in figs)
+                 + "; contact diameter / Wagner over "
+                 f"[{T_WAGNER[0]}, {T_WAGNER[1]}] t_c: "
+                 + ", ".join(f"{f['wagner_ratio']:.3f}" for f in figs)
+                 + f" at D/dx = {list(levels)}")
+    notes.append(f"{tag}: peak von Mises at D/dx={levels[-1]}: {fin['vm_peak'] / 1e6:.2f} "
+                 f"MPa at {fin['vm_t_tc']:.2f} t_c after contact, r = "
+                 f"{fin['vm_r_m'] * 1e6:.1f} um, z = {fin['vm_z_m'] * 1e6:.2f} um; heat "
+                 f"{fin['heat'] * 1e6:.3f} uJ = {fin['heat'] / fin['heat_ideal']:.3f} of the "
+                 "ideal contact over the run's wetted-area history; peak / thermal plateau "
+                 f"E alpha dT_c / (1 - nu) = {fin['vm_thermal'] / 1e6:.1f} MPa: "
+                 + ", ".join(f"{f['vm_peak'] / f['vm_thermal']:.3f}" for f in figs)
+                 + f" at D/dx = {list(levels)}")
+    notes.append(f"{tag}: impact point, window [{T_WINDOW[0]}, {T_WINDOW[1]}] t_c: max "
+                 "|rise / strained-contact rise - 1| "
+                 + ", ".join(f"{f['T_impact_dev']:.3f}" for f in figs)
+                 + "; max |rise / static contact rise - 1| "
+                 + ", ".join(f"{f['T_impact_static']:.3f}" for f in figs)
+                 + "; mean strain a t_c " + ", ".join(f"{f['strain_tc']:.2f}" for f in figs)
+                 + f" at D/dx = {list(levels)}")
+    return crit, notes
+
+
 @register("droplet-impact")
 def droplet_impact(quick: bool) -> CaseResult:
-    """The axisymmetric droplet job at three or more spacings per speed (module docstring;
-    Richardson figures from the three finest)."""
+    """The axisymmetric droplet job at three spacings per speed (module docstring): the
+    quick case at 50 m/s and :data:`LEVELS_QUICK`, the full one at :data:`SPEEDS` with
+    :func:`levels_for` each."""
     speeds = (50.0,) if quick else SPEEDS
-    levels = LEVELS_QUICK if quick else LEVELS_FULL
     t_end = T_END_QUICK if quick else T_END_FULL
     D = 2.0 * next(b for b in base_scene().to_dict()["blocks"] if b["kind"] == "fluid")["radius"]
     runs: list[Run] = []
     crit: dict[str, Criterion] = {}
     notes: list[str] = []
     for V in speeds:
+        levels = LEVELS_QUICK if quick else levels_for(V)
         figs = []
         for n in levels:
             f, wall = run_one(V, n, t_end)
@@ -259,66 +352,9 @@ def droplet_impact(quick: bool) -> CaseResult:
                             f["T_impact_dev"], wall,
                             {k: f[k] for k in ("spread", "heat", "T_impact", "vm_peak",
                                                "vm_t_tc", "steps")}))
-        hs = [D / n for n in levels]
-        fin = figs[-1]
-        tag = f"{V:g} m/s"
-        crit[f"{tag} balance"] = Criterion(
-            f"{tag}: |heat lost by the fluid / heat gained by the substrate - 1| (all levels)",
-            max(f["balance"] for f in figs), TOL_BALANCE)
-        crit[f"{tag} contact T"] = Criterion(
-            f"{tag}, D/dx={levels[-1]}: max |impact-point rise / strained-contact rise - 1| "
-            f"(the run's strain history) over [{T_WINDOW[0]}, {T_WINDOW[1]}] t_c after "
-            "contact", fin["T_impact_dev"], TOL_CONTACT)
-        for key, label in FIGURES.items():
-            est = richardson(hs, [f[key] for f in figs])
-            rel = ((abs(est.finest - est.value) + est.error_bar) / abs(est.value)
-                   if est.value else math.inf)
-            order = f"{est.order:.2f}" if est.order is not None else "none"
-            notes.append(f"{tag} {label}: levels {[f'{f[key]:.4g}' for f in figs]}, order "
-                         f"{order}, limit {est.value:.4g} +- {est.error_bar:.2g}"
-                         f"{' (' + est.note + ')' if est.note else ''}")
-            if not quick:
-                crit[f"{tag} {key} converged"] = Criterion(
-                    f"{tag}: {label} at D/dx={levels[-1]} within {TOL_CONVERGED:.0%} of the "
-                    "Richardson limit, error bar included", rel, TOL_CONVERGED)
-        if not quick:
-            crit[f"{tag} spread max reached"] = Criterion(
-                f"{tag}: time of maximum spreading / end time (< 1: the run goes past it)",
-                fin["spread_t_tc"] * fin["tc"] / fin["t_end"], 0.98)
-        if not quick:
-            crit[f"{tag} Wagner"] = Criterion(
-                f"{tag}, D/dx={levels[-1]}: |mean contact diameter / Wagner's sqrt(6 t / t_c) "
-                f"- 1| over [{T_WAGNER[0]}, {T_WAGNER[1]}] t_c after contact",
-                abs(fin["wagner_ratio"] - 1.0), TOL_WAGNER)
-            lo, hi = fin["correlations"]
-            crit[f"{tag} correlations"] = Criterion(
-                f"{tag}, D/dx={levels[-1]}: distance of D_max/D = {fin['spread']:.2f} outside "
-                f"the correlations' band [{lo:.2f}, {hi:.2f}] (We {fin['We']:.0f}, Re "
-                f"{fin['Re']:.0f}), relative to the band's edge",
-                max(lo / fin["spread"] - 1.0, fin["spread"] / hi - 1.0, 0.0), TOL_CORRELATIONS)
-        notes.append(f"{tag}: lamella at maximum spreading, particles across (2 D / (3 beta^2 "
-                     "dx)): " + ", ".join(f"{f['lamella_particles']:.1f}" for f in figs)
-                     + "; residual film 0.79 D Re^-0.4 (Roisman 2009), particles across: "
-                     + ", ".join(f"{f['film_particles']:.1f}" for f in figs)
-                     + "; contact diameter / Wagner over "
-                     f"[{T_WAGNER[0]}, {T_WAGNER[1]}] t_c: "
-                     + ", ".join(f"{f['wagner_ratio']:.3f}" for f in figs)
-                     + f" at D/dx = {list(levels)}")
-        notes.append(f"{tag}: peak von Mises at D/dx={levels[-1]}: {fin['vm_peak'] / 1e6:.2f} "
-                     f"MPa at {fin['vm_t_tc']:.2f} t_c after contact, r = "
-                     f"{fin['vm_r_m'] * 1e6:.1f} um, z = {fin['vm_z_m'] * 1e6:.2f} um; heat "
-                     f"{fin['heat'] * 1e6:.3f} uJ = {fin['heat'] / fin['heat_ideal']:.3f} of the "
-                     "ideal contact over the run's wetted-area history; peak / thermal plateau "
-                     f"E alpha dT_c / (1 - nu) = {fin['vm_thermal'] / 1e6:.1f} MPa: "
-                     + ", ".join(f"{f['vm_peak'] / f['vm_thermal']:.3f}" for f in figs)
-                     + f" at D/dx = {list(levels)}")
-        notes.append(f"{tag}: impact point, window [{T_WINDOW[0]}, {T_WINDOW[1]}] t_c: max "
-                     "|rise / strained-contact rise - 1| "
-                     + ", ".join(f"{f['T_impact_dev']:.3f}" for f in figs)
-                     + "; max |rise / static contact rise - 1| "
-                     + ", ".join(f"{f['T_impact_static']:.3f}" for f in figs)
-                     + "; mean strain a t_c " + ", ".join(f"{f['strain_tc']:.2f}" for f in figs)
-                     + f" at D/dx = {list(levels)}")
+        c, nt = speed_criteria(V, levels, figs, quick)
+        crit.update(c)
+        notes.extend(nt)
     return CaseResult("droplet-impact", runs, crit, notes, resolution_label="dx [m]",
                       extra_columns={"spread": "D_max/D", "heat": "heat J",
                                      "T_impact": "rise K", "vm_peak": "vM Pa"})
