@@ -594,7 +594,7 @@ class AxisymmetricHeatModule(PhysicsModule):
         return float(np.sum(ps.m[real] * ps.c_heat[real] * ps.T[real]))
 
     def _system(self, ctx):
-        from sphfem.heat.axisymmetric import axis_ghosts
+        from sphfem.heat.axisymmetric import axis_ghosts, heat_conductances
 
         ps = ctx.particles
         # rings with k = 0 (the substrate of model = "fem-contact") take part in no pair:
@@ -624,27 +624,34 @@ class AxisymmetricHeatModule(PhysicsModule):
             hi = xa.max(axis=0) + radius if n else np.ones(2)
             nl = build_neighbor_list(xa, radius, lo, hi, np.zeros(2), kind=kind,
                                      keep=tuple(keep))
-            self._list = (radius, real, src, nl, x.copy())
+            m = nl.indices.shape[0]  # packed pair rows (heat_conductances), per build
+            pairs = (np.zeros(n, np.int64), np.zeros(m, np.int64), np.zeros(m))
+            self._list = (radius, real, src, nl, x.copy(), pairs)
             self.list_builds += 1
         A = ring_areas(ps)[real]
         k = ps.k_heat[real]
         inv = 1.0 / (x[:, 0] * ps.rho[real] * ps.c_heat[real])
-        return dict(real=real, xa=xa, src=src, n=n, nl=nl,
-                    A=np.concatenate([A, A[src]]), k=np.concatenate([k, k[src]]),
-                    rc=np.concatenate([x[:, 0], x[src, 0]]), inv=inv,
-                    mom=np.ones(n + src.shape[0]))
+        s = dict(real=real, xa=xa, src=src, n=n, nl=nl,
+                 A=np.concatenate([A, A[src]]), k=np.concatenate([k, k[src]]),
+                 rc=np.concatenate([x[:, 0], x[src, 0]]), inv=inv,
+                 mom=np.ones(n + src.shape[0]))
+        # the pair weights once per step (both Heun stages use them; heat_rates' sums)
+        pairs = self._list[5]
+        g = heat_conductances(xa, s["A"], s["k"], s["rc"], inv, s["mom"], n, nl.offsets,
+                              nl.indices, ctx.R, self.sigma, self.kcode, np.zeros(2),
+                              *pairs)
+        self._limit = self.cfl * 2.0 / g if g > 0 else math.inf
+        s["pairs"] = pairs
+        return s
 
     def _rates(self, ctx, T_all, sysd=None):
-        from sphfem.heat.axisymmetric import heat_rates
+        from sphfem.heat.axisymmetric import heat_rates_packed
 
         s = sysd if sysd is not None else self._system(ctx)
         T = T_all[s["real"]]
         Ta = np.concatenate([T, T[s["src"]]])
         out = np.zeros(s["n"])
-        g = heat_rates(s["xa"], Ta, s["A"], s["k"], s["rc"], s["inv"], s["mom"], s["n"],
-                       s["nl"].offsets, s["nl"].indices, ctx.R, self.sigma, self.kcode,
-                       np.zeros(2), out)
-        self._limit = self.cfl * 2.0 / g if g > 0 else math.inf
+        heat_rates_packed(Ta, s["inv"], s["n"], s["nl"].offsets, *s["pairs"], out)
         return out, s
 
     def dt_limits(self, ctx) -> dict[str, float]:

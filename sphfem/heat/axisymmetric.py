@@ -161,6 +161,60 @@ def heat_rates(x, T, A, k, r_cond, inv_rrc, mom, n, offsets, indices, R, sigma, 
     return best
 
 
+@njit(cache=True, parallel=True)
+def heat_conductances(x, A, k, r_cond, inv_rrc, mom, n, offsets, indices, R, sigma,
+                      kernel_code, period, count, pair_j, pair_g):
+    """The pair weights of :func:`heat_rates` for fixed positions, once: for each real row i
+    the pairs j within R with k_i + k_j > 0, in list order, packed at the start of the row's
+    slots ``offsets[i]:`` of ``pair_j`` (j) and ``pair_g`` (g_ij = A_j k_ij (r_i + r~_j) F_ij
+    2 / (mom_i + mom_j), the same expression), ``count[i]`` of them.  Returns the Gershgorin
+    bound of :func:`heat_rates`.  Every rate at these positions is then
+    :func:`heat_rates_packed` (a Heun step's two stages: the same rates to the bit)."""
+    R2 = R * R
+    rows = np.zeros(n)
+    for i in prange(n):
+        ri = x[i, 0]
+        ki = k[i]
+        w = 0.0
+        pos = offsets[i]
+        for jj in range(offsets[i], offsets[i + 1]):
+            j = indices[jj]
+            d0 = x[j, 0] - ri
+            d1 = min_image(x[j, 1] - x[i, 1], period[1])
+            d2 = d0 * d0 + d1 * d1
+            if d2 >= R2 or d2 == 0.0:
+                continue
+            d = math.sqrt(d2)
+            F = -sigma * kernels.kernel_dfdq(d / R, kernel_code) / (R * d)
+            kj = k[j]
+            ks = ki + kj
+            if ks <= 0.0:
+                continue
+            g = A[j] * (2.0 * ki * kj / ks) * (ri + r_cond[j]) * F * 2.0 / (mom[i] + mom[j])
+            pair_j[pos] = j
+            pair_g[pos] = g
+            pos += 1
+            w += g
+        count[i] = pos - offsets[i]
+        rows[i] = 2.0 * w * inv_rrc[i]
+    best = 0.0
+    for i in range(n):
+        best = max(best, rows[i])
+    return best
+
+
+@njit(cache=True, parallel=True)
+def heat_rates_packed(T, inv_rrc, n, offsets, count, pair_j, pair_g, out):
+    """dT_i/dt of eq. (1) for the real rows from the pair weights of
+    :func:`heat_conductances` (``T`` over real + ghost rows)."""
+    for i in prange(n):
+        Ti = T[i]
+        s = 0.0
+        for jj in range(offsets[i], offsets[i] + count[i]):
+            s += pair_g[jj] * (T[pair_j[jj]] - Ti)
+        out[i] = s * inv_rrc[i]
+
+
 class AxisymmetricHeat:
     """Heat conduction on fixed particles in the (r, z) half-plane (module docstring).
 
