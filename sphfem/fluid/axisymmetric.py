@@ -198,7 +198,7 @@ def mean_area(x, A, kind, offsets, indices, Rp, kcode, Lz, out):
 
 @njit(cache=True, parallel=True)
 def gradients(x, rho, vg, A, kind, offsets, indices, Rp, s2, kcode, Lz, cond_max, lam_min,
-              grad_rho, dvdr, shep, Bm, qs, gc):
+              grad_rho, dvdr, shep, Bm, qs, gc, qv):
     """Renormalised <grad rho>, <d_r (v_r / r)> and <d_r v_z> (``dvdr[:, 0]``, ``[:, 1]``)
     of the real FLUID rows.
 
@@ -206,7 +206,9 @@ def gradients(x, rho, vg, A, kind, offsets, indices, Rp, s2, kcode, Lz, cond_max
     mirrors: the source's with v_r negated).  Rows that are not fluid are zeroed.  Pair
     support (R_i + R_j) / 2, kernel normalisation ``s2`` / R^2.  ``qs``: the Shepard
     average over the fluid (and its mirrors), self included, of v_r / r.  ``gc``: grad C_i =
-    sum_j A_j grad_i W_ij over every neighbour (particle shifting).
+    sum_j A_j grad_i W_ij over every neighbour (particle shifting).  ``qv``: vg_r / r of
+    every row (any value where r = 0; :func:`hoop_ratio`).  The pair factors of a support
+    R_ij are computed when R_ij changes along the row (once for fixed h).
     """
     for i in prange(x.shape[0]):
         grad_rho[i, 0] = 0.0
@@ -230,6 +232,9 @@ def gradients(x, rho, vg, A, kind, offsets, indices, Rp, s2, kcode, Lz, cond_max
         gc1 = 0.0
         wq = shep[i]
         sq = wq * qi
+        Rc = -1.0  # the support of the cached pair factors
+        sigma = 0.0
+        fac = 0.0
         for jj in range(offsets[i], offsets[i + 1]):
             j = indices[jj]
             r0 = x[j, 0] - x[i, 0]
@@ -238,8 +243,10 @@ def gradients(x, rho, vg, A, kind, offsets, indices, Rp, s2, kcode, Lz, cond_max
             R = 0.5 * (Rp[i] + Rp[j])
             if d2 >= R * R or d2 == 0.0:
                 continue
-            sigma = s2 / (R * R)
-            fac = sigma / R
+            if R != Rc:
+                Rc = R
+                sigma = s2 / (R * R)
+                fac = sigma / R
             d = math.sqrt(d2)
             s = A[j] * (-fac * kernels.kernel_dfdq(d / R, kcode) / d)
             m00 += s * r0 * r0
@@ -250,7 +257,7 @@ def gradients(x, rho, vg, A, kind, offsets, indices, Rp, s2, kcode, Lz, cond_max
             t = s * (rho[j] - rho[i])
             g0 += t * r0
             g1 += t * r1
-            qj = vg[j, 0] / x[j, 0] if x[j, 0] != 0.0 else qi
+            qj = qv[j] if x[j, 0] != 0.0 else qi
             u = s * (qj - qi)
             a0 += u * r0
             a1 += u * r1
@@ -290,7 +297,7 @@ def gradients(x, rho, vg, A, kind, offsets, indices, Rp, s2, kcode, Lz, cond_max
 @njit(cache=True, parallel=True)
 def forces(x, v, vg, vd, rho, p, A, mt, mu, kind, grad_rho, dvdr, offsets, indices, Rp, s2,
            kcode, Lz, gravity, eps, delta_c, alpha_c, hoop, Bm, qh, frag_incompressible, fw,
-           wall_art, acc, drho, gradv):
+           wall_art, acc, drho, gradv, prr):
     """Accelerations and density rates of the real FLUID rows (module docstring); other
     rows are zeroed.  ``hoop``: 1.0, or 0.0 to drop the hoop terms (planar mode).  Arrays
     run over the augmented set (real + mirrors, fields filled).  Pair support R_ij =
@@ -298,7 +305,9 @@ def forces(x, v, vg, vd, rho, p, A, mt, mu, kind, grad_rho, dvdr, offsets, indic
     eps h_ij^2, the delta term delta_c h_ij, the artificial viscosity alpha_c h_ij).  Wall
     pairs: the viscous term times ``fw[i]`` (:mod:`sphfem.fluid.wall_layer`), the artificial
     viscosity times ``wall_art`` (1 or 0).  ``gradv[i]`` = (L00, L01, L10, L11), the
-    renormalised velocity gradient L_ab = d v_a / d x_b of the continuity's velocity."""
+    renormalised velocity gradient L_ab = d v_a / d x_b of the continuity's velocity.
+    ``prr``: p / rho^2 of every row (:func:`pressure_ratio`).  The pair factors of a support
+    R_ij are computed when R_ij changes along the row (once for fixed h)."""
     for i in prange(x.shape[0]):
         acc[i, 0] = 0.0
         acc[i, 1] = 0.0
@@ -316,6 +325,11 @@ def forces(x, v, vg, vd, rho, p, A, mt, mu, kind, grad_rho, dvdr, offsets, indic
         G10 = 0.0
         G11 = 0.0
         diff = 0.0
+        Rc = -1.0  # the support of the cached pair factors
+        hij = 0.0
+        eps2 = 0.0
+        art_c = 0.0
+        fac = 0.0
         for jj in range(offsets[i], offsets[i + 1]):
             j = indices[jj]
             r0 = x[j, 0] - x[i, 0]
@@ -324,16 +338,19 @@ def forces(x, v, vg, vd, rho, p, A, mt, mu, kind, grad_rho, dvdr, offsets, indic
             R = 0.5 * (Rp[i] + Rp[j])
             if d2 >= R * R or d2 == 0.0:
                 continue
-            hij = 0.5 * R
-            eps2 = eps * hij * hij
-            art_coef = alpha_c * hij
-            fac = s2 / (R * R * R)
+            if R != Rc:
+                Rc = R
+                hij = 0.5 * R
+                eps2 = eps * hij * hij
+                art_c = alpha_c * hij
+                fac = s2 / (R * R * R)
+            art_coef = art_c
             d = math.sqrt(d2)
             F = -fac * kernels.kernel_dfdq(d / R, kcode) / d
             rj = rho[j]
             fl = _isfluid(kind[j])
             mj = mt[j]
-            cp = -mj * (pri + p[j] / (rj * rj)) * F
+            cp = -mj * (pri + prr[j]) * F
             muj = mu[j] if fl else mui
             rs = ri + rj
             inv = 1.0 / ((d2 + eps2) * rs * rs)
@@ -370,6 +387,98 @@ def forces(x, v, vg, vd, rho, p, A, mt, mu, kind, grad_rho, dvdr, offsets, indic
             drho[i] = 2.0 * diff
         else:
             drho[i] = ri * cont - hoop * ri * qh[i] + 2.0 * diff
+
+
+@njit(cache=True)
+def _predict(fidx, x, v, rho, acc, drho, h, v_n, rho_n, lam, hold, rho0):
+    """The predictor of :meth:`AxisymmetricFluid.step` on the fluid rows ``fidx``: keeps v
+    and rho in ``v_n``, ``rho_n``; x += h v, v += h a, rho += h Drho/Dt (h = dt / 2), then
+    with ``hold`` rho = rho0 where rho < rho0 and lam < 0.75 (``_hold_surface_density``)."""
+    for q in range(fidx.shape[0]):
+        i = fidx[q]
+        v_n[q, 0] = v[i, 0]
+        v_n[q, 1] = v[i, 1]
+        rho_n[q] = rho[i]
+        x[i, 0] += h * v[i, 0]
+        x[i, 1] += h * v[i, 1]
+        v[i, 0] += h * acc[i, 0]
+        v[i, 1] += h * acc[i, 1]
+        rho[i] += h * drho[i]
+        if hold and lam[i] < 0.75 and rho[i] < rho0:
+            rho[i] = rho0
+
+
+@njit(cache=True)
+def _correct(fidx, x, v, rho, acc, drho, dt, h, v_n, rho_n, lam, hold, rho0):
+    """The corrector of :meth:`AxisymmetricFluid.step`: v = v_n + dt a, rho = rho_n + dt
+    Drho/Dt, the surface hold as in :func:`_predict`, x += h v."""
+    for q in range(fidx.shape[0]):
+        i = fidx[q]
+        v[i, 0] = v_n[q, 0] + dt * acc[i, 0]
+        v[i, 1] = v_n[q, 1] + dt * acc[i, 1]
+        rho[i] = rho_n[q] + dt * drho[i]
+        if hold and lam[i] < 0.75 and rho[i] < rho0:
+            rho[i] = rho0
+        x[i, 0] += h * v[i, 0]
+        x[i, 1] += h * v[i, 1]
+
+
+@njit(cache=True)
+def _reflect_axis(fidx, x, v, plane, zw):
+    """Fluid rows with r < 0 reflected across the axis (r, v_r negated); with ``plane``,
+    rows below z = ``zw`` reflected across that plane (z -> 2 zw - z, v_z negated)."""
+    for q in range(fidx.shape[0]):
+        i = fidx[q]
+        if x[i, 0] < 0.0:
+            x[i, 0] *= -1.0
+            v[i, 0] *= -1.0
+    if plane:
+        for q in range(fidx.shape[0]):
+            i = fidx[q]
+            if x[i, 1] < zw:
+                x[i, 1] = 2.0 * zw - x[i, 1]
+                v[i, 1] *= -1.0
+
+
+@njit(cache=True)
+def _fluid_extrema(fidx, v, acc, Rp, rho):
+    """(max |v|, max |a|, min R_i, min rho) over the fluid rows (:meth:`dt_limits`)."""
+    vmax = -np.inf
+    amax = -np.inf
+    rmin = np.inf
+    rhomin = np.inf
+    for q in range(fidx.shape[0]):
+        i = fidx[q]
+        vmax = max(vmax, math.sqrt(v[i, 0] ** 2 + v[i, 1] ** 2))
+        amax = max(amax, math.sqrt(acc[i, 0] ** 2 + acc[i, 1] ** 2))
+        rmin = min(rmin, Rp[i])
+        rhomin = min(rhomin, rho[i])
+    return vmax, amax, rmin, rhomin
+
+
+@njit(cache=True)
+def _all_finite(fidx, x, rho):
+    """True when the positions and densities of the fluid rows are finite."""
+    for q in range(fidx.shape[0]):
+        i = fidx[q]
+        if not (np.isfinite(x[i, 0]) and np.isfinite(x[i, 1]) and np.isfinite(rho[i])):
+            return False
+    return True
+
+
+@njit(cache=True)
+def hoop_ratio(x, vg, out):
+    """out_j = vg_r,j / r_j (0 where r_j = 0): the q_j of :func:`gradients`, once per row."""
+    for j in range(x.shape[0]):
+        out[j] = vg[j, 0] / x[j, 0] if x[j, 0] != 0.0 else 0.0
+
+
+@njit(cache=True)
+def pressure_ratio(p, rho, out):
+    """out_j = p_j / rho_j^2 (the pressure term's p_j / (rho_j rho_j) of :func:`forces`; 0
+    where rho_j = 0)."""
+    for j in range(p.shape[0]):
+        out[j] = p[j] / (rho[j] * rho[j]) if rho[j] != 0.0 else 0.0
 
 
 @njit(cache=True)
@@ -532,6 +641,7 @@ class AxisymmetricFluid:
         self.drho = np.zeros(n)
         self.p = np.zeros(n)
         self.fluid = self.kind == FLUID
+        self._fidx = np.flatnonzero(self.fluid)
         self.planar = bool(planar)
         self.wall_z = None if wall_z is None else float(wall_z)
         self.z0, self.Lz = (0.0, 0.0) if periodic_z is None else map(float, periodic_z)
@@ -721,8 +831,10 @@ class AxisymmetricFluid:
         mt[:n] = rho[:n] * A[:n]
         _fill_mirrors(n, src, mtype, zw, self.gravity[1], x, v, vg, rho, p, A, mt, mu, gr, dvdr,
                       Rp)
+        qv = np.empty(m)
+        hoop_ratio(x, vg, qv)
         gradients(x, rho, vg, A, kind, nl.offsets, nl.indices, Rp, self.s2, self.kcode,
-                  self.Lz, pa.cond_max, self.renorm_lambda_min, gr, dvdr, shep, Bm, qs, gc)
+                  self.Lz, pa.cond_max, self.renorm_lambda_min, gr, dvdr, shep, Bm, qs, gc, qv)
         #: grad C and the renormalisation B (c00, c01, c11) of the real rows (shifting)
         self._grad_c = (gc[:n].copy(), Bm[:n, :3].copy())
         if self.h_mode == "mean-area":  # R_i of the next evaluation
@@ -742,11 +854,13 @@ class AxisymmetricFluid:
         fw[:n] = self.fw
         mirror_scalar(n, src, fw)
         wall_art = 1.0 if self.wall_friction == "sph" else 0.0
+        prr = np.empty(m)
+        pressure_ratio(p, rho, prr)
         forces(x, v, vg, vd, rho, p, A, mt, mu, kind, gr, dvdr, nl.offsets, nl.indices, Rp,
                self.s2, self.kcode, self.Lz, self.gravity, pa.eps_visc, pa.delta * pa.c0,
                pa.alpha * pa.c0,
                0.0 if self.planar else 1.0, Bm, qh, self.fragment_incompressible, fw,
-               wall_art, acc, drho, gradv)
+               wall_art, acc, drho, gradv, prr)
         if self.wall_friction == "layer":
             self._layer_inputs(x, kind, nl, Rp, src, mtype, gradv, qh)
         if self.csf is not None:  # CSF over the fluid's widest support (adaptive_h)
@@ -824,13 +938,13 @@ class AxisymmetricFluid:
     # -- time stepping -------------------------------------------------------------------
     def dt_limits(self) -> dict[str, float]:
         """Acoustic, viscous and force limits [s] (as :meth:`FluidSolver.dt_limits`)."""
-        pa, fl = self.params, self.fluid
-        vmax = float(np.sqrt((self.v[fl] ** 2).sum(axis=1)).max())
-        h = 0.5 * float(self.Rp[fl].min())
-        amax = float(np.sqrt((self.acc[fl] ** 2).sum(axis=1)).max())
+        pa = self.params
+        vmax, amax, rmin, rhomin = _fluid_extrema(self._fidx, self.v, self.acc, self.Rp,
+                                                  self.rho)
+        h = 0.5 * rmin
         lim = {"acoustic": pa.cfl * h / (pa.c0 + vmax)}
         if pa.mu > 0:
-            lim["viscous"] = pa.visc_cfl * h**2 * float(self.rho[fl].min()) / pa.mu
+            lim["viscous"] = pa.visc_cfl * h**2 * rhomin / pa.mu
         if amax > 0:
             lim["force"] = pa.force_cfl * math.sqrt(h / amax)
         return lim
@@ -841,27 +955,25 @@ class AxisymmetricFluid:
     def step(self, dt: float) -> None:
         """Predictor-corrector position Verlet (:mod:`sphfem.fluid.wcsph`); particles that
         cross the axis are reflected."""
-        fl = self.fluid
+        fi = self._fidx
         if self._layer is not None:
             self._advance_layer(dt)
-        v_n = self.v[fl].copy()
-        rho_n = self.rho[fl].copy()
-        self.x[fl] += 0.5 * dt * self.v[fl]
-        self.v[fl] += 0.5 * dt * self.acc[fl]
-        self.rho[fl] += 0.5 * dt * self.drho[fl]
-        self._hold_surface_density()
+        v_n = np.empty((fi.shape[0], 2))
+        rho_n = np.empty(fi.shape[0])
+        hold, rho0 = self.free_surface_no_tension, float(self.params.rho0)
+        # the numpy updates x[fl] += 0.5 dt v[fl], ... and _hold_surface_density, per row
+        _predict(fi, self.x, self.v, self.rho, self.acc, self.drho, 0.5 * dt, v_n, rho_n,
+                 self.lam, hold, rho0)
         self._reflect()
         self.evaluate()
-        self.v[fl] = v_n + dt * self.acc[fl]
-        self.rho[fl] = rho_n + dt * self.drho[fl]
-        self._hold_surface_density()
-        self.x[fl] += 0.5 * dt * self.v[fl]
+        _correct(fi, self.x, self.v, self.rho, self.acc, self.drho, dt, 0.5 * dt, v_n, rho_n,
+                 self.lam, hold, rho0)
         if self.shifting > 0.0:
             self._shift(dt)
         self._reflect()
         self.t += dt
         self.step_count += 1
-        if not np.isfinite(self.x[fl]).all() or not np.isfinite(self.rho[fl]).all():
+        if not _all_finite(fi, self.x, self.rho):
             raise FloatingPointError(f"axisymmetric fluid: non-finite state at step "
                                      f"{self.step_count}, t = {self.t:.4g} s")
 
@@ -909,13 +1021,8 @@ class AxisymmetricFluid:
     def _reflect(self) -> None:
         """Reflect the fluid at the axis and the wall plane, wrap periodic z, and hold it
         out of particle walls with normals (:mod:`sphfem.fluid.no_penetration`)."""
-        neg = self.fluid & (self.x[:, 0] < 0.0)
-        self.x[neg, 0] *= -1.0
-        self.v[neg, 0] *= -1.0
-        if self.wall_z is not None:
-            below = self.fluid & (self.x[:, 1] < self.wall_z)
-            self.x[below, 1] = 2.0 * self.wall_z - self.x[below, 1]
-            self.v[below, 1] *= -1.0
+        _reflect_axis(self._fidx, self.x, self.v, self.wall_z is not None,
+                      0.0 if self.wall_z is None else self.wall_z)
         if self.Lz:
             self.x[:, 1] = self.z0 + np.mod(self.x[:, 1] - self.z0, self.Lz)
         if self.no_penetration is not None:
