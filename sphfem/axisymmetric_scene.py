@@ -302,6 +302,7 @@ class AxisymmetricFluidModule(PhysicsModule):
         self.solver.t = ctx.t
         self.solver.step_count = ctx.step
         self.fl = kind == FLUID
+        self._fl_rows = np.flatnonzero(self.fl)
         # the floor: the wall particles whose exposed face is a top face (normal +e_z)
         floor = np.zeros(len(x), bool) if nrm is None else (kind == WALL) & (nrm[:, 1] > 0.5)
         walls = x[floor]
@@ -348,13 +349,9 @@ class AxisymmetricFluidModule(PhysicsModule):
                               "v the droplet block's speed"}
 
     def _write_back(self, ctx) -> None:
+        from sphfem.fluid.axisymmetric import scatter_state
+
         s, ps, idx = self.solver, ctx.particles, self.idx
-        ps.x[idx] = s.x
-        ps.v[idx] = s.v
-        ps.rho[idx] = s.rho
-        ps.p[idx] = s.p
-        f = idx[self.fl]
-        ps.vol[f] = ps.m[f] / ps.rho[f]
         aug = s.augmented
         out = np.zeros((aug["x"].shape[0], 2))
         nl = aug["nbrs"]
@@ -363,8 +360,9 @@ class AxisymmetricFluidModule(PhysicsModule):
                          aug["mu"], aug["kind"], nl.offsets, nl.indices, aug["Rp"], s.s2,
                          s.kcode, pa.eps_visc, pa.alpha * pa.c0, aug["fw"], aug["wall_art"],
                          out)
-        ps.f_fluid[idx] = out[: s.n]
-        ps.f_fluid[idx[self.fl]] = 0.0
+        # ps.x[idx] = s.x, ... v, rho, p, f_fluid (0 on the fluid), vol = m / rho (fluid)
+        scatter_state(idx, self.fl, s.x, s.v, s.rho, s.p, out, ps.x, ps.v, ps.rho, ps.p,
+                      ps.m, ps.vol, ps.f_fluid)
 
     def dt_limits(self, ctx) -> dict[str, float]:
         return self.solver.dt_limits()
@@ -432,15 +430,17 @@ class AxisymmetricFluidModule(PhysicsModule):
         s = self.solver
         if s.no_penetration is None or self._wall_tree is None:
             return
-        fl = np.flatnonzero(self.fl)
-        dv = s.v[fl] - (v_n[fl] + dt * s.acc[fl])
-        hit = np.flatnonzero(np.abs(dv).max(axis=1) > 0.0)
+        from sphfem.fluid.axisymmetric import changed_velocities
+
+        fl = self._fl_rows
+        hit = changed_velocities(fl, s.v, v_n, s.acc, dt)
         if hit.size == 0:
             return
+        dv = s.v[fl[hit]] - (v_n[fl[hit]] + dt * s.acc[fl[hit]])
         _, j = self._wall_tree.query(s.x[fl[hit]])
         w = self._walls[j]
         n = self.nrm[w]
-        dvn = (dv[hit] * n).sum(axis=1)
+        dvn = (dv * n).sum(axis=1)
         F = -(s.M[fl[hit]] * dvn / dt)[:, None] * n
         ps = ctx.particles
         np.add.at(ps.f_fluid, self.idx[w], F)

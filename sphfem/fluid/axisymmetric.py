@@ -467,6 +467,48 @@ def _all_finite(fidx, x, rho):
 
 
 @njit(cache=True)
+def scatter_state(idx, fluid, x, v, rho, p, f, px, pv, prho, pp, pm, pvol, pf):
+    """Copy the solver's rows onto the particle set's rows ``idx``: x, v, rho, p, the ring
+    forces ``f`` (0 on fluid rows) and vol = m / rho on the fluid rows (``fluid`` mask of
+    the solver's rows): the write-back of the scene's fluid module
+    (:class:`sphfem.axisymmetric_scene.AxisymmetricFluidModule`)."""
+    for q in range(idx.shape[0]):
+        i = idx[q]
+        px[i, 0] = x[q, 0]
+        px[i, 1] = x[q, 1]
+        pv[i, 0] = v[q, 0]
+        pv[i, 1] = v[q, 1]
+        prho[i] = rho[q]
+        pp[i] = p[q]
+        if fluid[q]:
+            pvol[i] = pm[i] / prho[i]
+            pf[i, 0] = 0.0
+            pf[i, 1] = 0.0
+        else:
+            pf[i, 0] = f[q, 0]
+            pf[i, 1] = f[q, 1]
+
+
+@njit(cache=True)
+def changed_velocities(rows, v, v_n, acc, dt):
+    """The positions k in ``rows`` whose velocity is not v_n + dt a (a reflection or the
+    no-penetration correction changed it after the corrector): the rows with
+    max |v - (v_n + dt a)| > 0 (a NaN component: not counted, as numpy's max)."""
+    out = np.empty(rows.shape[0], np.int64)
+    c = 0
+    for k in range(rows.shape[0]):
+        i = rows[k]
+        d0 = v[i, 0] - (v_n[i, 0] + dt * acc[i, 0])
+        d1 = v[i, 1] - (v_n[i, 1] + dt * acc[i, 1])
+        if d0 != d0 or d1 != d1:
+            continue
+        if abs(d0) > 0.0 or abs(d1) > 0.0:
+            out[c] = k
+            c += 1
+    return out[:c]
+
+
+@njit(cache=True)
 def hoop_ratio(x, vg, out):
     """out_j = vg_r,j / r_j (0 where r_j = 0): the q_j of :func:`gradients`, once per row."""
     for j in range(x.shape[0]):
