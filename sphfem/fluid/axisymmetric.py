@@ -509,6 +509,50 @@ def changed_velocities(rows, v, v_n, acc, dt):
 
 
 @njit(cache=True)
+def _mirror_positions(n, src, mtype, zw, x):
+    """The positions of the mirrors n + q (those of :func:`_fill_mirrors`, alone)."""
+    for q in range(src.shape[0]):
+        s = src[q]
+        g = n + q
+        if mtype[q] == 0:
+            x[g, 0] = -x[s, 0]
+            x[g, 1] = x[s, 1]
+        else:
+            x[g, 0] = x[s, 0]
+            x[g, 1] = 2.0 * zw - x[s, 1]
+
+
+@njit(cache=True)
+def _shift_inputs(gc, B, lam, kind, Rp, lam_min, gcs, nrm, near, kind_out):
+    """The per-row inputs of :func:`sphfem.fluid.surface.shift` for
+    :meth:`AxisymmetricFluid._shift` (rows of ``gc``): the outward normal -b / |b|, b = B
+    grad C (-b where |b| = 0), ``near`` = lambda < 0.75 and not a fragment (lambda <=
+    ``lam_min``), grad C h_i / h_max, fragments' kind set to WALL (no shift).  Returns
+    (h_max, h_min), h = R_i / 2."""
+    n = gc.shape[0]
+    hmax = -np.inf
+    hmin = np.inf
+    for i in range(n):
+        h = 0.5 * Rp[i]
+        hmax = max(hmax, h)
+        hmin = min(hmin, h)
+    for i in range(n):
+        b0 = B[i, 0] * gc[i, 0] + B[i, 1] * gc[i, 1]
+        b1 = B[i, 1] * gc[i, 0] + B[i, 2] * gc[i, 1]
+        nb = math.sqrt(b0 ** 2 + b1 ** 2)
+        den = nb if nb > 0.0 else 1.0
+        nrm[i, 0] = -b0 / den
+        nrm[i, 1] = -b1 / den
+        fragment = lam[i] <= lam_min
+        near[i] = lam[i] < 0.75 and not fragment
+        f = (0.5 * Rp[i]) / hmax
+        gcs[i, 0] = gc[i, 0] * f
+        gcs[i, 1] = gc[i, 1] * f
+        kind_out[i] = WALL if fragment else kind[i]
+    return hmax, hmin
+
+
+@njit(cache=True)
 def hoop_ratio(x, vg, out):
     """out_j = vg_r,j / r_j (0 where r_j = 0): the q_j of :func:`gradients`, once per row."""
     for j in range(x.shape[0]):
@@ -734,6 +778,8 @@ class AxisymmetricFluid:
         self.delta2 = np.full(n, -1.0)
         #: the layer equation's inputs from the last evaluation (``wall_friction = "layer"``)
         self._layer = None
+        #: (list, wall normals of its augmented rows) of the last list build (layer)
+        self._layer_normals = None
         if wall_friction == "layer":
             if self.wall_normals is None or not wl.any():
                 raise ValueError("wall_friction = 'layer' needs wall particles with wall "
@@ -828,9 +874,7 @@ class AxisymmetricFluid:
         x = np.empty((m, 2))
         x[:n] = self.x
         zw = 0.0 if self.wall_z is None else self.wall_z
-        _fill_mirrors(n, src, mtype, zw, self.gravity[1], x, x.copy(), x.copy(),
-                      np.zeros(m), np.zeros(m), np.zeros(m), np.zeros(m), np.zeros(m),
-                      np.zeros((m, 2)), np.zeros((m, 2)), np.zeros(m))
+        _mirror_positions(n, src, mtype, zw, x)
         if not reuse:
             radius = R * (1.0 + self.skin)
             lo = x.min(axis=0) - radius
@@ -930,9 +974,13 @@ class AxisymmetricFluid:
         from sphfem.fluid.wall_layer import band_normals, surface_divergence
 
         n = self.n
-        nrm = np.zeros((x.shape[0], 2))
-        nrm[:n] = np.where((self.kind == WALL)[:, None], self.wall_normals, 0.0)
-        mirror_normals(n, src, mtype, nrm, np.zeros(x.shape[0]))
+        c = self._layer_normals  # the augmented rows' wall normals, fixed per list build
+        if c is None or c[0] is not nl:
+            nrm = np.zeros((x.shape[0], 2))
+            nrm[:n] = np.where((self.kind == WALL)[:, None], self.wall_normals, 0.0)
+            mirror_normals(n, src, mtype, nrm, np.zeros(x.shape[0]))
+            self._layer_normals = c = (nl, nrm)
+        nrm = c[1]
         bn = np.zeros((n, 2))
         band = np.zeros(n, np.int8)
         band_normals(x, kind, nl.offsets, nl.indices, Rp, nrm, self.kcode, n, bn, band)
@@ -1045,20 +1093,19 @@ class AxisymmetricFluid:
         a = self.augmented
         n = self.n
         gc, B = self._grad_c  # of this step's (mid-step) evaluation
-        # outward normal n = -B grad C / |B grad C| (B the identity where it was not used)
-        b = np.column_stack([B[:, 0] * gc[:, 0] + B[:, 1] * gc[:, 1],
-                             B[:, 1] * gc[:, 0] + B[:, 2] * gc[:, 1]])
-        nb = np.sqrt((b**2).sum(axis=1))
-        nrm = -b / np.where(nb > 0.0, nb, 1.0)[:, None]
-        fragment = self.lam <= self.renorm_lambda_min
-        near = (self.lam < 0.75) & ~fragment
-        h = 0.5 * a["Rp"][:n]
-        gc = gc * (h / h.max())[:, None]  # coefficient A h_max below: per-particle h_i
-        kind = np.where(fragment, WALL, self.kind).astype(np.int8)  # fragments: none
+        # outward normal n = -B grad C / |B grad C| (B the identity where it was not used);
+        # fragments get kind WALL (no shift); grad C scaled by h_i / h_max (coefficient
+        # A h_max below: per-particle h_i)
+        nrm = np.empty((n, 2))
+        gcs = np.empty((n, 2))
+        near = np.empty(n, np.bool_)
+        kind = np.empty(n, np.int8)
+        hmax, hmin = _shift_inputs(gc, B, self.lam, self.kind, a["Rp"], self.renorm_lambda_min,
+                                   gcs, nrm, near, kind)
         out = np.zeros(n)
-        shift(self.x, self.v, self.rho, kind, gc, nrm, near, a["grad_rho"][:n],
-              self.shifting * float(h.max()), dt, 0.1 * float(h.min()), self.shift_surface, out)
-        self.last_shift = float(out.max() / h.min())
+        shift(self.x, self.v, self.rho, kind, gcs, nrm, near, a["grad_rho"][:n],
+              self.shifting * hmax, dt, 0.1 * hmin, self.shift_surface, out)
+        self.last_shift = float(out.max() / hmin)
 
     def _reflect(self) -> None:
         """Reflect the fluid at the axis and the wall plane, wrap periodic z, and hold it
