@@ -594,7 +594,7 @@ class AxisymmetricHeatModule(PhysicsModule):
         return float(np.sum(ps.m[real] * ps.c_heat[real] * ps.T[real]))
 
     def _system(self, ctx):
-        from sphfem.heat.axisymmetric import axis_ghosts, heat_conductances
+        from sphfem.heat.axisymmetric import axis_ghosts, heat_conductances, ring_system
 
         ps = ctx.particles
         # rings with k = 0 (the substrate of model = "fem-contact") take part in no pair:
@@ -608,9 +608,6 @@ class AxisymmetricHeatModule(PhysicsModule):
         if (c is not None and np.array_equal(c[1], real)
                 and ctx.R + 2.0 * _max_move(x, c[4]) <= c[0]):
             src, nl = c[2], c[3]  # the list (and axis ghosts) of the last build still hold
-            xg = x[src].copy()
-            xg[:, 0] *= -1.0
-            xa = np.ascontiguousarray(np.vstack([x, xg]))
             self.list_reuses += 1
         else:  # ghosts and list out to R (1 + skin)
             radius = ctx.R * (1.0 + self.skin)
@@ -628,13 +625,13 @@ class AxisymmetricHeatModule(PhysicsModule):
             pairs = (np.zeros(n, np.int64), np.zeros(m, np.int64), np.zeros(m))
             self._list = (radius, real, src, nl, x.copy(), pairs)
             self.list_builds += 1
-        A = ring_areas(ps)[real]
-        k = ps.k_heat[real]
-        inv = 1.0 / (x[:, 0] * ps.rho[real] * ps.c_heat[real])
-        s = dict(real=real, xa=xa, src=src, n=n, nl=nl,
-                 A=np.concatenate([A, A[src]]), k=np.concatenate([k, k[src]]),
-                 rc=np.concatenate([x[:, 0], x[src, 0]]), inv=inv,
-                 mom=np.ones(n + src.shape[0]))
+        # positions, A = ring_areas, k, radii of the rows and their ghosts, 1 / (r rho c)
+        na = n + src.shape[0]
+        s = dict(real=real, xa=np.empty((na, 2)), src=src, n=n, nl=nl, A=np.empty(na),
+                 k=np.empty(na), rc=np.empty(na), inv=np.empty(n), mom=np.ones(na))
+        ring_system(ps.x, ps.m, ps.rho, ps.c_heat, ps.k_heat, real, src, s["xa"], s["A"],
+                    s["k"], s["rc"], s["inv"])
+        xa, inv = s["xa"], s["inv"]
         # the pair weights once per step (both Heun stages use them; heat_rates' sums)
         pairs = self._list[5]
         g = heat_conductances(xa, s["A"], s["k"], s["rc"], inv, s["mom"], n, nl.offsets,
@@ -644,12 +641,15 @@ class AxisymmetricHeatModule(PhysicsModule):
         s["pairs"] = pairs
         return s
 
-    def _rates(self, ctx, T_all, sysd=None):
-        from sphfem.heat.axisymmetric import heat_rates_packed
+    def _rates(self, ctx, T_all, sysd=None, k1=None, dt=0.0):
+        """dT/dt of the rows ``s["real"]`` at T_all (with ``k1`` and ``dt``: at T_all + dt k1
+        on those rows, Heun's predictor) and the system."""
+        from sphfem.heat.axisymmetric import heat_rates_packed, ring_temperatures
 
         s = sysd if sysd is not None else self._system(ctx)
-        T = T_all[s["real"]]
-        Ta = np.concatenate([T, T[s["src"]]])
+        Ta = np.empty(s["xa"].shape[0])
+        ring_temperatures(T_all, s["real"], s["src"], s["inv"] if k1 is None else k1,
+                          dt if k1 is not None else 0.0, Ta)
         out = np.zeros(s["n"])
         heat_rates_packed(Ta, s["inv"], s["n"], s["nl"].offsets, *s["pairs"], out)
         return out, s
@@ -662,9 +662,7 @@ class AxisymmetricHeatModule(PhysicsModule):
         ps = ctx.particles
         e_before = self.energy(ps)
         k1, s = self._rates(ctx, ps.T)
-        T1 = ps.T.copy()
-        T1[s["real"]] += dt * k1
-        k2, _ = self._rates(ctx, T1, s)
+        k2, _ = self._rates(ctx, ps.T, s, k1, dt)  # at T + dt k1
         ps.T[s["real"]] += 0.5 * dt * (k1 + k2)
         self.residual += self.energy(ps) - e_before
         self.steps += 1

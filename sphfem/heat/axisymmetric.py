@@ -161,6 +161,46 @@ def heat_rates(x, T, A, k, r_cond, inv_rrc, mom, n, offsets, indices, R, sigma, 
     return best
 
 
+@njit(cache=True)
+def ring_system(x, m, rho, c, k, real, src, xa, A, ka, rc, inv):
+    """The per-row arrays of the ring heat system of
+    :class:`sphfem.axisymmetric_scene.AxisymmetricHeatModule` from the particle set's
+    positions ``x``, ring masses ``m``, ``rho``, ``c`` and ``k``: the rows ``real`` then
+    their axis ghosts (sources ``src``, positions in ``real`` order): positions ``xa`` (ghost
+    r negated), meridian areas A = m / (2 pi r rho) (:func:`sphfem.axisymmetric.planar_area`),
+    conductivities ``ka``, conductance radii ``rc`` (a ghost: its source's r) and, for the
+    real rows, ``inv`` = 1 / (r rho c)."""
+    n = real.shape[0]
+    two_pi = 2.0 * math.pi
+    for q in range(n):
+        i = real[q]
+        r = x[i, 0]
+        xa[q, 0] = r
+        xa[q, 1] = x[i, 1]
+        A[q] = m[i] / (two_pi * r * rho[i])
+        ka[q] = k[i]
+        rc[q] = r
+        inv[q] = 1.0 / (r * rho[i] * c[i])
+    for g in range(src.shape[0]):
+        s = src[g]
+        xa[n + g, 0] = -xa[s, 0]
+        xa[n + g, 1] = xa[s, 1]
+        A[n + g] = A[s]
+        ka[n + g] = ka[s]
+        rc[n + g] = xa[s, 0]
+
+
+@njit(cache=True)
+def ring_temperatures(T, real, src, rate, dt, Ta):
+    """Ta over the rows of :func:`ring_system`: T[real] (+ dt ``rate`` when dt != 0, a Heun
+    predictor), the ghosts their sources' values."""
+    n = real.shape[0]
+    for q in range(n):
+        Ta[q] = T[real[q]] + dt * rate[q] if dt != 0.0 else T[real[q]]
+    for g in range(src.shape[0]):
+        Ta[n + g] = Ta[src[g]]
+
+
 @njit(cache=True, parallel=True)
 def heat_conductances(x, A, k, r_cond, inv_rrc, mom, n, offsets, indices, R, sigma,
                       kernel_code, period, count, pair_j, pair_g):
