@@ -198,7 +198,7 @@ def mean_area(x, A, kind, offsets, indices, Rp, kcode, Lz, out):
 
 @njit(cache=True, parallel=True)
 def gradients(x, rho, vg, A, kind, offsets, indices, Rp, s2, kcode, Lz, cond_max, lam_min,
-              grad_rho, dvdr, shep, Bm, qs, gc, qv):
+              grad_rho, dvdr, shep, Bm, qs, gc, qv, count, pair_j, pair_d, pair_k):
     """Renormalised <grad rho>, <d_r (v_r / r)> and <d_r v_z> (``dvdr[:, 0]``, ``[:, 1]``)
     of the real FLUID rows.
 
@@ -208,13 +208,17 @@ def gradients(x, rho, vg, A, kind, offsets, indices, Rp, s2, kcode, Lz, cond_max
     average over the fluid (and its mirrors), self included, of v_r / r.  ``gc``: grad C_i =
     sum_j A_j grad_i W_ij over every neighbour (particle shifting).  ``qv``: vg_r / r of
     every row (any value where r = 0; :func:`hoop_ratio`).  The pair factors of a support
-    R_ij are computed when R_ij changes along the row (once for fixed h).
+    R_ij are computed when R_ij changes along the row (once for fixed h).  The pairs within
+    their support (d_ij < R_ij, d_ij > 0) are packed, in list order, at the start of each
+    fluid row's list slots: ``pair_j`` (j), ``pair_d`` (d_ij), ``pair_k`` (f'(d_ij / R_ij),
+    the kernel shape's derivative), ``count[i]`` of them (:func:`forces` reads them).
     """
     for i in prange(x.shape[0]):
         grad_rho[i, 0] = 0.0
         grad_rho[i, 1] = 0.0
         dvdr[i, 0] = 0.0
         dvdr[i, 1] = 0.0
+        count[i] = 0
         if kind[i] != FLUID:
             continue
         m00 = 0.0
@@ -235,6 +239,7 @@ def gradients(x, rho, vg, A, kind, offsets, indices, Rp, s2, kcode, Lz, cond_max
         Rc = -1.0  # the support of the cached pair factors
         sigma = 0.0
         fac = 0.0
+        pos = offsets[i]
         for jj in range(offsets[i], offsets[i + 1]):
             j = indices[jj]
             r0 = x[j, 0] - x[i, 0]
@@ -248,7 +253,12 @@ def gradients(x, rho, vg, A, kind, offsets, indices, Rp, s2, kcode, Lz, cond_max
                 sigma = s2 / (R * R)
                 fac = sigma / R
             d = math.sqrt(d2)
-            s = A[j] * (-fac * kernels.kernel_dfdq(d / R, kcode) / d)
+            kd = kernels.kernel_dfdq(d / R, kcode)
+            pair_j[pos] = j
+            pair_d[pos] = d
+            pair_k[pos] = kd
+            pos += 1
+            s = A[j] * (-fac * kd / d)
             m00 += s * r0 * r0
             m01 += s * r0 * r1
             m11 += s * r1 * r1
@@ -269,6 +279,7 @@ def gradients(x, rho, vg, A, kind, offsets, indices, Rp, s2, kcode, Lz, cond_max
             if _isfluid(kind[j]):
                 wq += w
                 sq += w * qj
+        count[i] = pos - offsets[i]
         qs[i] = sq / wq
         gc[i, 0] = gc0
         gc[i, 1] = gc1
@@ -297,7 +308,7 @@ def gradients(x, rho, vg, A, kind, offsets, indices, Rp, s2, kcode, Lz, cond_max
 @njit(cache=True, parallel=True)
 def forces(x, v, vg, vd, rho, p, A, mt, mu, kind, grad_rho, dvdr, offsets, indices, Rp, s2,
            kcode, Lz, gravity, eps, delta_c, alpha_c, hoop, Bm, qh, frag_incompressible, fw,
-           wall_art, acc, drho, gradv, prr):
+           wall_art, acc, drho, gradv, prr, count, pair_j, pair_d, pair_k):
     """Accelerations and density rates of the real FLUID rows (module docstring); other
     rows are zeroed.  ``hoop``: 1.0, or 0.0 to drop the hoop terms (planar mode).  Arrays
     run over the augmented set (real + mirrors, fields filled).  Pair support R_ij =
@@ -307,7 +318,9 @@ def forces(x, v, vg, vd, rho, p, A, mt, mu, kind, grad_rho, dvdr, offsets, indic
     viscosity times ``wall_art`` (1 or 0).  ``gradv[i]`` = (L00, L01, L10, L11), the
     renormalised velocity gradient L_ab = d v_a / d x_b of the continuity's velocity.
     ``prr``: p / rho^2 of every row (:func:`pressure_ratio`).  The pair factors of a support
-    R_ij are computed when R_ij changes along the row (once for fixed h)."""
+    R_ij are computed when R_ij changes along the row (once for fixed h).  The pairs are
+    those :func:`gradients` packed (``count``, ``pair_j``, ``pair_d``, ``pair_k``: the
+    list's pairs within their support, in list order, with d_ij and f'(d_ij / R_ij))."""
     for i in prange(x.shape[0]):
         acc[i, 0] = 0.0
         acc[i, 1] = 0.0
@@ -330,14 +343,12 @@ def forces(x, v, vg, vd, rho, p, A, mt, mu, kind, grad_rho, dvdr, offsets, indic
         eps2 = 0.0
         art_c = 0.0
         fac = 0.0
-        for jj in range(offsets[i], offsets[i + 1]):
-            j = indices[jj]
+        for jj in range(offsets[i], offsets[i] + count[i]):
+            j = pair_j[jj]
             r0 = x[j, 0] - x[i, 0]
             r1 = min_image(x[j, 1] - x[i, 1], Lz)
             d2 = r0 * r0 + r1 * r1
             R = 0.5 * (Rp[i] + Rp[j])
-            if d2 >= R * R or d2 == 0.0:
-                continue
             if R != Rc:
                 Rc = R
                 hij = 0.5 * R
@@ -345,8 +356,7 @@ def forces(x, v, vg, vd, rho, p, A, mt, mu, kind, grad_rho, dvdr, offsets, indic
                 art_c = alpha_c * hij
                 fac = s2 / (R * R * R)
             art_coef = art_c
-            d = math.sqrt(d2)
-            F = -fac * kernels.kernel_dfdq(d / R, kcode) / d
+            F = -fac * pair_k[jj] / pair_d[jj]
             rj = rho[j]
             fl = _isfluid(kind[j])
             mj = mt[j]
@@ -780,6 +790,8 @@ class AxisymmetricFluid:
         self._layer = None
         #: (list, wall normals of its augmented rows) of the last list build (layer)
         self._layer_normals = None
+        #: (list, count, j, d, f') of the last list build: the pairs gradients packs
+        self._pairs = None
         if wall_friction == "layer":
             if self.wall_normals is None or not wl.any():
                 raise ValueError("wall_friction = 'layer' needs wall particles with wall "
@@ -919,8 +931,14 @@ class AxisymmetricFluid:
                       Rp)
         qv = np.empty(m)
         hoop_ratio(x, vg, qv)
+        pc = self._pairs  # packed pairs of gradients for forces: arrays once per list build
+        if pc is None or pc[0] is not nl:
+            k = nl.indices.shape[0]
+            pc = self._pairs = (nl, np.zeros(m, np.int64), np.zeros(k, np.int64), np.zeros(k),
+                                np.zeros(k))
         gradients(x, rho, vg, A, kind, nl.offsets, nl.indices, Rp, self.s2, self.kcode,
-                  self.Lz, pa.cond_max, self.renorm_lambda_min, gr, dvdr, shep, Bm, qs, gc, qv)
+                  self.Lz, pa.cond_max, self.renorm_lambda_min, gr, dvdr, shep, Bm, qs, gc, qv,
+                  *pc[1:])
         #: grad C and the renormalisation B (c00, c01, c11) of the real rows (shifting)
         self._grad_c = (gc[:n].copy(), Bm[:n, :3].copy())
         if self.h_mode == "mean-area":  # R_i of the next evaluation
@@ -946,7 +964,7 @@ class AxisymmetricFluid:
                self.s2, self.kcode, self.Lz, self.gravity, pa.eps_visc, pa.delta * pa.c0,
                pa.alpha * pa.c0,
                0.0 if self.planar else 1.0, Bm, qh, self.fragment_incompressible, fw,
-               wall_art, acc, drho, gradv, prr)
+               wall_art, acc, drho, gradv, prr, *pc[1:])
         if self.wall_friction == "layer":
             self._layer_inputs(x, kind, nl, Rp, src, mtype, gradv, qh)
         if self.csf is not None:  # CSF over the fluid's widest support (adaptive_h)
