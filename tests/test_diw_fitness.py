@@ -249,6 +249,26 @@ def test_centre_objective_of_one_displaced_station(p):
     assert f["objective"] <= e / H
 
 
+def test_centreline_of_the_desired_bead_at_a_sharp_corner():
+    """The centreline figure's floor at a sharp corner: a fine lattice filling the desired
+    bead of half-width b around the 90-degree bend (every point within b of the path).
+    In the corner's station (arc +-a around it, a = half a station) the outer particles
+    beyond the corner project onto it with offsets up to b, while an inner particle
+    projects onto the nearer leg at an offset no larger than its foot's distance from the
+    corner, so at most a: the station's centreline is (b - a)/2, not 0, for a bead that
+    follows the path exactly.  Measured within one lattice spacing."""
+    path, _ = named_case("bend90")
+    dx, b = D / 32, 0.75 * D
+    a = 0.5 * path.length / math.ceil(path.length / D)
+    g = np.arange(-5.6e-3, 5.6e-3, dx) + dx / 2
+    X, Y = np.meshgrid(g, g)
+    xy = np.column_stack([X.ravel(), Y.ravel()])
+    xy = xy[path.project(xy)[0] <= b]
+    f = deposit_fitness(xy, 1.5 * dx, D, path)
+    assert f["centre_dev_max_D"] == pytest.approx((b - a) / 2 / D, abs=dx / D)
+    assert f["edge_dev_max_D"] <= dx / D
+
+
 def test_centre_objective_p_below_one_raises():
     line = DesiredPath([Line((0.0, 0.0), (1e-3, 0.0))])
     with pytest.raises(ValueError, match="centre_p"):
