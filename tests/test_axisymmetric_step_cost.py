@@ -66,3 +66,122 @@ def test_packed_heat_rates_equal_heat_rates_bitwise():
         heat_rates_packed(Ta, inv, n, nl.offsets, count, pj, pg, out)
         assert np.array_equal(out, ref) and g_packed == g_ref
         assert np.abs(ref).max() > 0.0
+
+
+def test_step_kernels_equal_the_numpy_updates_bitwise():
+    """The predictor / corrector loops of AxisymmetricFluid.step, the axis reflection and the
+    shifting's inputs give the numpy expressions they replaced to the bit."""
+    from sphfem.fluid.axisymmetric import (
+        _correct,
+        _predict,
+        _reflect_axis,
+        _shift_inputs,
+    )
+    from sphfem.particles import FLUID, WALL
+
+    rng = np.random.default_rng(7)
+    n = 400
+    kind = np.where(rng.random(n) < 0.7, FLUID, WALL).astype(np.int8)
+    fl = kind == FLUID
+    fi = np.flatnonzero(fl)
+    x = rng.normal(size=(n, 2))
+    v, acc = rng.normal(size=(n, 2)), rng.normal(size=(n, 2)) * 1e3
+    rho, drho = 1000.0 + rng.normal(size=n), rng.normal(size=n) * 1e4
+    lam = rng.uniform(0.0, 1.0, n)
+    dt, rho0 = 3.7e-7, 1000.0
+    # predictor and corrector against the numpy forms (with the surface density hold)
+    X, V, Rho = x.copy(), v.copy(), rho.copy()
+    v_n, rho_n = V[fl].copy(), Rho[fl].copy()
+    X[fl] += 0.5 * dt * V[fl]
+    V[fl] += 0.5 * dt * acc[fl]
+    Rho[fl] += 0.5 * dt * drho[fl]
+    s = fl & (lam < 0.75) & (Rho < rho0)
+    Rho[s] = rho0
+    x2, v2, rho2 = x.copy(), v.copy(), rho.copy()
+    vn2, rhon2 = np.empty((fi.size, 2)), np.empty(fi.size)
+    _predict(fi, x2, v2, rho2, acc, drho, 0.5 * dt, vn2, rhon2, lam, True, rho0)
+    assert np.array_equal(X, x2) and np.array_equal(V, v2) and np.array_equal(Rho, rho2)
+    assert np.array_equal(v_n, vn2) and np.array_equal(rho_n, rhon2)
+    V[fl] = v_n + dt * acc[fl]
+    Rho[fl] = rho_n + dt * drho[fl]
+    s = fl & (lam < 0.75) & (Rho < rho0)
+    Rho[s] = rho0
+    X[fl] += 0.5 * dt * V[fl]
+    _correct(fi, x2, v2, rho2, acc, drho, dt, 0.5 * dt, vn2, rhon2, lam, True, rho0)
+    assert np.array_equal(X, x2) and np.array_equal(V, v2) and np.array_equal(Rho, rho2)
+    # reflection at the axis and at a wall plane
+    zw = 0.1
+    neg = fl & (X[:, 0] < 0.0)
+    X[neg, 0] *= -1.0
+    V[neg, 0] *= -1.0
+    below = fl & (X[:, 1] < zw)
+    X[below, 1] = 2.0 * zw - X[below, 1]
+    V[below, 1] *= -1.0
+    _reflect_axis(fi, x2, v2, True, zw)
+    assert neg.any() and below.any()
+    assert np.array_equal(X, x2) and np.array_equal(V, v2)
+    # the shifting's inputs (AxisymmetricFluid._shift before)
+    gc, B = rng.normal(size=(n, 2)), rng.normal(size=(n, 3))
+    gc[:3] = 0.0  # |b| = 0
+    Rp = rng.uniform(0.9, 1.1, n)
+    b = np.column_stack([B[:, 0] * gc[:, 0] + B[:, 1] * gc[:, 1],
+                         B[:, 1] * gc[:, 0] + B[:, 2] * gc[:, 1]])
+    nb = np.sqrt((b**2).sum(axis=1))
+    nrm = -b / np.where(nb > 0.0, nb, 1.0)[:, None]
+    fragment = lam <= 0.2
+    near = (lam < 0.75) & ~fragment
+    h = 0.5 * Rp
+    gcs = gc * (h / h.max())[:, None]
+    kind_s = np.where(fragment, WALL, kind).astype(np.int8)
+    out = (np.empty((n, 2)), np.empty((n, 2)), np.empty(n, np.bool_), np.empty(n, np.int8))
+    hmax, hmin = _shift_inputs(gc, B, lam, kind, Rp, 0.2, out[1], out[0], out[2], out[3])
+    assert hmax == h.max() and hmin == h.min()
+    assert np.array_equal(out[0], nrm) and np.array_equal(out[1], gcs)
+    assert np.array_equal(out[2], near) and np.array_equal(out[3], kind_s)
+
+
+def test_gradients_pack_the_pairs_within_support():
+    """gradients packs, per fluid row and in list order, exactly the list's pairs with
+    0 < d_ij < R_ij, with d_ij and f'(d_ij / R_ij) (the pairs forces runs over)."""
+    from sphfem import kernels
+    from sphfem.fluid.axisymmetric import KEEP, gradients, hoop_ratio
+    from sphfem.neighbors import build_neighbor_list
+    from sphfem.particles import FLUID, WALL
+
+    rng = np.random.default_rng(11)
+    dx = 0.1
+    g = (np.arange(12) + 0.5) * dx
+    x = np.array(np.meshgrid(g, g)).reshape(2, -1).T + rng.uniform(-0.2, 0.2, (144, 2)) * dx
+    kind = np.where(x[:, 1] < 0.25, WALL, FLUID).astype(np.int8)
+    m = len(x)
+    Rp = np.full(m, 3.0 * dx) * rng.uniform(0.9, 1.1, m)  # varying support: R_ij per pair
+    rl = 1.15 * Rp.max()
+    nl = build_neighbor_list(x, rl, x.min(axis=0) - rl, x.max(axis=0) + rl, np.zeros(2),
+                             kind=kind, keep=KEEP)
+    kc = kernels.kernel_code("wendland_c2")
+    s2 = kernels.kernel_sigma(kc, 2, 1.0)
+    vg = rng.normal(size=(m, 2))
+    qv = np.empty(m)
+    hoop_ratio(x, vg, qv)
+    k = nl.indices.shape[0]
+    count, pj, pd, pk = np.zeros(m, np.int64), np.zeros(k, np.int64), np.zeros(k), np.zeros(k)
+    z = lambda *s: np.zeros(s)  # noqa: E731
+    gradients(x, 1000.0 + rng.normal(size=m), vg, np.full(m, dx * dx), kind, nl.offsets,
+              nl.indices, Rp, s2, kc, 0.0, 1e6, 0.2, z(m, 2), z(m, 2), z(m), z(m, 5), z(m),
+              z(m, 2), qv, count, pj, pd, pk)
+    packed = 0
+    for i in range(m):
+        o = nl.offsets[i]
+        js = nl.indices[o:nl.offsets[i + 1]]
+        r = x[js] - x[i]
+        d2 = r[:, 0] * r[:, 0] + r[:, 1] * r[:, 1]
+        R = 0.5 * (Rp[i] + Rp[js])
+        keep = (d2 < R * R) & (d2 != 0.0) if kind[i] == FLUID else np.zeros(len(js), bool)
+        c = int(count[i])
+        assert c == keep.sum()
+        assert np.array_equal(pj[o:o + c], js[keep])
+        d = np.sqrt(d2[keep])
+        assert np.array_equal(pd[o:o + c], d)
+        assert np.array_equal(pk[o:o + c], [kernels.kernel_dfdq(q, kc) for q in d / R[keep]])
+        packed += c
+    assert 0 < packed < nl.indices.shape[0]
