@@ -1133,11 +1133,11 @@ class AxisymmetricFluid:
         if self.Lz:
             self.x[:, 1] = self.z0 + np.mod(self.x[:, 1] - self.z0, self.Lz)
         if self.no_penetration is not None:
-            fl = self.fluid
-            xs, vs = self.x[fl], self.v[fl]
+            fi = self._fidx
+            xs, vs = np.take(self.x, fi, axis=0), np.take(self.v, fi, axis=0)
             if self.no_penetration.apply(xs, vs):
                 self.penetration_corrections += 1
-                self.x[fl], self.v[fl] = xs, vs
+                self.x[fi], self.v[fi] = xs, vs
 
     def run(self, t_end: float, callback=None, every: float | None = None) -> int:
         """Step to ``t_end`` with the stable step, ``callback(self)`` every ``every`` s."""

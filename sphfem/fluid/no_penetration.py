@@ -189,6 +189,7 @@ class NoPenetration:
         self.reach = 4.0 * float(self.half.max()) * 2.0 if keep.any() else 0.0
         self._tree = None
         self._grid = None
+        self._work = None
         if keep.any():
             # cells of size reach (a point's candidates lie in the 3^d cells around it)
             origin = self.xw.min(axis=0) - self.reach
@@ -217,8 +218,10 @@ class NoPenetration:
         if self._grid is None or n == 0:
             return phi, nrm
         origin, ncell, start, items, stencil = self._grid
-        cd2 = np.empty((n, self.k))
-        cj = np.empty((n, self.k), np.int64)
+        w = self._work  # the (n, k) candidate arrays, kept for the next call of this size
+        if w is None or w[0].shape[0] != n:
+            w = self._work = (np.empty((n, self.k)), np.empty((n, self.k), np.int64))
+        cd2, cj = w
         signed_distance(x, self.xw, self.nw, self.half, self.reach, self.k, origin,
                         self.reach, ncell, start, items, stencil, cd2, cj, phi, nrm)
         return phi, nrm
