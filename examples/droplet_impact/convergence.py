@@ -6,9 +6,10 @@
 Runs the validation's scene (:func:`sphfem.validation.droplet_impact.scene_at`) at SPEED
 [m/s] and each level N (particles across the droplet; default: the case's own three,
 :func:`~sphfem.validation.droplet_impact.levels_for`) into ``DIR/V{SPEED}_n{N}``.  A level
-with a completed ``summary.json`` is read, not run again; one with a checkpoint continues
-from it (the runs write one at every output, every 0.1 t_c here), so the script can be
-stopped and started again at no loss.  Then it prints the case's criteria and notes for
+that has completed to the end time is read, not run again; one with a checkpoint continues
+from it (the runs write one at every output, every 0.1 t_c here, and keep the last), so
+the script can be stopped and started again at no loss, and a longer ``--t-end-tc``
+continues completed levels.  Then it prints the case's criteria and notes for
 this speed (:func:`~sphfem.validation.droplet_impact.speed_criteria`, from all the levels
 given), and writes ``DIR/convergence_V{SPEED}.json`` and a figure ``.png``: the four
 figures against dx with the Richardson limit and its error bar, and the spread against
@@ -34,7 +35,7 @@ def run_level(speed: float, n: int, t_end_tc: float, folder: Path) -> dict:
     from sphfem.validation import droplet_impact as di
 
     done = folder / "summary.json"
-    if done.exists() and not (folder / "checkpoint.npz").exists():
+    if done.exists():
         s = json.loads(done.read_text())
         drop = next(b for b in s["scene"]["blocks"] if b["kind"] == "fluid")
         if (s.get("status") == "completed"
@@ -44,7 +45,8 @@ def run_level(speed: float, n: int, t_end_tc: float, folder: Path) -> dict:
     d["output"]["every"] = "0.1 tc"
     scene = parse_scene(d, source=f"convergence V={speed:g} D/dx={n}")
     resume = (folder / "checkpoint.npz").exists()
-    run(scene, folder, resume=resume, overwrite=not resume)
+    # the checkpoint is kept, so a later, longer --t-end-tc continues the level
+    run(scene, folder, resume=resume, overwrite=not resume, keep_checkpoint=True)
     return json.loads(done.read_text())
 
 
@@ -92,7 +94,7 @@ def main(argv=None) -> int:
     ap.add_argument("--levels", type=int, nargs="+", default=None,
                     help="particles across the droplet, coarse to fine (default: the case's)")
     ap.add_argument("--t-end-tc", type=float, default=None,
-                    help="end time in t_c (default: the case's 4)")
+                    help="end time in t_c (default: the case's, di.t_end_for)")
     a = ap.parse_args(argv)
 
     from sphfem.output import write_json
@@ -103,7 +105,7 @@ def main(argv=None) -> int:
     levels = sorted(a.levels) if a.levels else list(di.levels_for(a.speed))
     if len(levels) < 3 or levels[0] <= 0:
         ap.error(f"--levels needs at least three positive levels, got {levels}")
-    t_end = a.t_end_tc or di.T_END_FULL
+    t_end = a.t_end_tc or di.t_end_for(a.speed)
     a.out.mkdir(parents=True, exist_ok=True)
     figs = []
     for n in levels:

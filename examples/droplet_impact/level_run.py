@@ -8,8 +8,9 @@ V the impact speed [m/s] (c0 = 10 V), N particles across the droplet, T_END_TC t
 t_c = D / V; ``--wall-radius`` widens the SPH wall, the domain and the lateral heat refinement
 to r = R [m] (the packaged scene: 0.3 mm); ``section.key=value`` overrides a scene key, e.g.
 ``fluid.wall_friction=layer`` or ``fluid.alpha=0.01``; ``--resume`` continues from OUT's
-checkpoint when there is one (the run writes one at every output; without the flag an
-existing OUT is overwritten).  Prints the validation's figures of the
+checkpoint when there is one (the run writes one at every output and keeps the last, so a
+completed level can be continued to a later T_END_TC; without the flag an existing OUT is
+overwritten).  Prints the validation's figures of the
 run (:func:`sphfem.validation.droplet_impact.figures`).
 """
 
@@ -54,7 +55,7 @@ def main(argv=None) -> None:
         node[last] = value
     scene = parse_scene(d, source=f"level_run V={a.speed:g} D/dx={a.per_diameter}")
     resume = a.resume and (a.out / "checkpoint.npz").exists()
-    run(scene, a.out, resume=resume, overwrite=not resume)
+    run(scene, a.out, resume=resume, overwrite=not resume, keep_checkpoint=True)
     summary = json.loads((a.out / "summary.json").read_text())
     drop = next(b for b in d["blocks"] if b["kind"] == "fluid")
     print(json.dumps(di.figures(summary, a.speed, 2.0 * drop["radius"]), default=str, indent=1))
