@@ -3,6 +3,7 @@ results of the passes they replace to the bit (benchmarks/README.md, "axisymmetr
 job, per-step cost")."""
 
 import numpy as np
+import pytest
 
 
 def _ring_cloud(seed=3, n_side=16, dx=0.1, k_zero_below=True):
@@ -17,11 +18,13 @@ def _ring_cloud(seed=3, n_side=16, dx=0.1, k_zero_below=True):
     return x, k, rng
 
 
-def test_packed_heat_rates_equal_heat_rates_bitwise():
+@pytest.mark.parametrize("uniform", [False, True])
+def test_packed_heat_rates_equal_heat_rates_bitwise(uniform):
     """heat_conductances + heat_rates_packed (the pair weights once, the rates of any T from
     them) give heat_rates' rates and Gershgorin bound to the bit, on a jittered ring
     cloud with axis ghosts, a Verlet-skin list (pairs beyond R in the rows) and rings with
-    k = 0, for two temperature fields (a Heun step's stages)."""
+    k = 0, for two temperature fields (a Heun step's stages); per-ring k and moments, or one
+    k and unit moments (the cached factors)."""
     from sphfem import kernels
     from sphfem.heat.axisymmetric import (
         axis_ghosts,
@@ -33,6 +36,8 @@ def test_packed_heat_rates_equal_heat_rates_bitwise():
     from sphfem.particles import FLUID, GHOST
 
     x, k, rng = _ring_cloud()
+    if uniform:
+        k[k > 0.0] = 0.6
     dx, R = 0.1, 0.3
     gh = axis_ghosts(x, 1.15 * R)
     n = len(x)
@@ -48,7 +53,7 @@ def test_packed_heat_rates_equal_heat_rates_bitwise():
     Aa = np.concatenate([A, A[gh.src]])
     ka = np.concatenate([k, k[gh.src]])
     rc = np.concatenate([x[:, 0], gh.r_cond])
-    mom = np.ones(n + gh.n)
+    mom = np.ones(n + gh.n) if uniform else rng.uniform(0.4, 1.1, n + gh.n)
     kc = kernels.kernel_code("wendland_c2")
     sig = kernels.kernel_sigma(kc, 2, R)
     m = nl.indices.shape[0]
