@@ -209,9 +209,7 @@ def heat_conductances(x, A, k, r_cond, inv_rrc, mom, n, offsets, indices, R, sig
     slots ``offsets[i]:`` of ``pair_j`` (j) and ``pair_g`` (g_ij = A_j k_ij (r_i + r~_j) F_ij
     2 / (mom_i + mom_j), the same expression), ``count[i]`` of them.  Returns the Gershgorin
     bound of :func:`heat_rates`.  Every rate at these positions is then
-    :func:`heat_rates_packed` (a Heun step's two stages: the same rates to the bit).  The
-    harmonic mean k_ij and mom_i + mom_j are computed when k_j or mom_j changes along the
-    row (once for one fluid and the plain form)."""
+    :func:`heat_rates_packed` (a Heun step's two stages: the same rates to the bit)."""
     R2 = R * R
     rows = np.zeros(n)
     for i in prange(n):
@@ -219,10 +217,6 @@ def heat_conductances(x, A, k, r_cond, inv_rrc, mom, n, offsets, indices, R, sig
         ki = k[i]
         w = 0.0
         pos = offsets[i]
-        kc = np.nan  # k_j and mom_j of the cached harmonic mean and moment factor
-        kh = 0.0
-        mc = np.nan
-        mf = 0.0
         for jj in range(offsets[i], offsets[i + 1]):
             j = indices[jj]
             d0 = x[j, 0] - ri
@@ -236,13 +230,7 @@ def heat_conductances(x, A, k, r_cond, inv_rrc, mom, n, offsets, indices, R, sig
             ks = ki + kj
             if ks <= 0.0:
                 continue
-            if kj != kc:  # 2 k_i k_j / (k_i + k_j): once per value of k_j along the row
-                kc = kj
-                kh = 2.0 * ki * kj / ks
-            if mom[j] != mc:
-                mc = mom[j]
-                mf = mom[i] + mom[j]
-            g = A[j] * kh * (ri + r_cond[j]) * F * 2.0 / mf
+            g = A[j] * (2.0 * ki * kj / ks) * (ri + r_cond[j]) * F * 2.0 / (mom[i] + mom[j])
             pair_j[pos] = j
             pair_g[pos] = g
             pos += 1
