@@ -15,7 +15,6 @@ cProfile dump (timer: process CPU) of the stepping loop.
 from __future__ import annotations
 
 import argparse
-import ast
 import json
 import sys
 import time
@@ -50,25 +49,6 @@ METHODS = (
     ("coupling.driver", "CouplingDriver", "couple"),
     ("coupling.substrate_heat", "SubstrateHeat", "exchange"),
 )
-
-
-def scene_dict(V: float, N: int, t_end_tc: float, overrides) -> dict:
-    """The scene of examples/droplet_impact/level_run.py (without ``--wall-radius``)."""
-    from sphfem.validation import droplet_impact as di
-
-    d = di.scene_at(V, N, t_end_tc)
-    for kv in overrides:
-        key, _, text = kv.partition("=")
-        try:
-            value = ast.literal_eval(text)
-        except (ValueError, SyntaxError):
-            value = text
-        node = d
-        *path, last = key.split(".")
-        for k in path:
-            node = node.setdefault(k, {})
-        node[last] = value
-    return d
 
 
 def install_timers(acc: dict) -> None:
@@ -136,8 +116,10 @@ def main(argv=None) -> None:
     from sphfem.output import prepare_output_dir
     from sphfem.scene import parse_scene
     from sphfem.simulation import Simulation
+    from sphfem.validation import droplet_impact as di
 
-    scene = parse_scene(scene_dict(a.speed, a.per_diameter, a.t_end_tc, a.overrides),
+    scene = parse_scene(di.scene_at(a.speed, a.per_diameter, a.t_end_tc,
+                                    overrides=a.overrides),
                         source="benchmarks/axisymmetric_step_profile")
     import coupling.driver  # noqa: F401  (loaded, so its dispatchers can be wrapped)
     import coupling.substrate_heat  # noqa: F401

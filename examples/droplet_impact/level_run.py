@@ -17,7 +17,6 @@ run (:func:`sphfem.validation.droplet_impact.figures`).
 from __future__ import annotations
 
 import argparse
-import ast
 import json
 from pathlib import Path
 
@@ -37,22 +36,8 @@ def main(argv=None) -> None:
     from sphfem.scene import parse_scene
     from sphfem.validation import droplet_impact as di
 
-    d = di.scene_at(a.speed, a.per_diameter, a.t_end_tc)
-    if a.wall_radius is not None:
-        d["domain"]["hi"][0] = a.wall_radius
-        next(b for b in d["blocks"] if b["kind"] == "wall")["hi"][0] = a.wall_radius
-        d["coupling"]["heat"]["lateral"] = [[0.0, a.wall_radius]]
-    for kv in a.overrides:
-        key, _, text = kv.partition("=")
-        try:
-            value = ast.literal_eval(text)
-        except (ValueError, SyntaxError):
-            value = text
-        node = d
-        *path, last = key.split(".")
-        for k in path:
-            node = node.setdefault(k, {})
-        node[last] = value
+    d = di.scene_at(a.speed, a.per_diameter, a.t_end_tc, wall_radius=a.wall_radius,
+                    overrides=a.overrides)
     scene = parse_scene(d, source=f"level_run V={a.speed:g} D/dx={a.per_diameter}")
     resume = a.resume and (a.out / "checkpoint.npz").exists()
     run(scene, a.out, resume=resume, overwrite=not resume, keep_checkpoint=True)

@@ -55,6 +55,7 @@ reported (the spreading and stress have not settled by then).
 
 from __future__ import annotations
 
+import ast
 import json
 import math
 import tempfile
@@ -127,9 +128,13 @@ def levels_for(speed: float, scene=None) -> tuple[int, int, int]:
                      f"more than D/dx = {LADDER[-1]} for {MIN_FILM_PARTICLES:g} particles")
 
 
-def scene_at(speed: float, per_diameter: int, t_end_tc: float) -> dict:
+def scene_at(speed: float, per_diameter: int, t_end_tc: float, *,
+             wall_radius: float | None = None, overrides=()) -> dict:
     """The scene dict at impact speed ``speed`` (c0 = 10 speed), ``per_diameter``
-    particles across the droplet, ending at ``t_end_tc`` t_c."""
+    particles across the droplet, ending at ``t_end_tc`` t_c.  ``wall_radius`` [m] widens
+    the SPH wall, the domain and the lateral heat refinement to that radius;
+    ``overrides``: ``"section.key=value"`` strings (the value a Python literal, else the
+    text), applied last, e.g. ``"fluid.wall_friction=sph"``."""
     from sphfem.resolution import scaled_resolution
 
     sc = base_scene()
@@ -149,6 +154,20 @@ def scene_at(speed: float, per_diameter: int, t_end_tc: float) -> dict:
     # fixed depth would carry 8 rows at D/dx 64, 24 at 128 (60 % of the particles there)
     wall = next(b for b in d["blocks"] if b["kind"] == "wall")
     wall["lo"][-1] = wall["hi"][-1] - d["sph"]["support_factor"] * d["sph"]["dx"]
+    if wall_radius is not None:
+        d["domain"]["hi"][0] = wall["hi"][0] = wall_radius
+        d["coupling"]["heat"]["lateral"] = [[0.0, wall_radius]]
+    for kv in overrides:
+        key, _, text = kv.partition("=")
+        try:
+            value = ast.literal_eval(text)
+        except (ValueError, SyntaxError):
+            value = text
+        node = d
+        *path, last = key.split(".")
+        for k in path:
+            node = node.setdefault(k, {})
+        node[last] = value
     return d
 
 
