@@ -123,6 +123,25 @@ def second_moments(x, A, n, offsets, indices, R, sigma, kernel_code, period, out
         out[i] = 0.5 * s
 
 
+@njit(cache=True, inline="always")
+def pair_conductance(x, A, k, r_cond, mom, i, j, ri, ki, R, R2, sigma, kernel_code, period):
+    """The weight g_ij of pair (i, j) in eq. (1), A_j k_ij (r_i + r_cond,j) F_ij 2 / (mom_i +
+    mom_j) with the harmonic k_ij = 2 k_i k_j / (k_i + k_j), >= 0; -1 for no pair (outside
+    the support, coincident, or k_i + k_j <= 0) (``ri`` = x[i, 0], ``ki`` = k[i], R2 = R^2)."""
+    d0 = x[j, 0] - ri
+    d1 = min_image(x[j, 1] - x[i, 1], period[1])
+    d2 = d0 * d0 + d1 * d1
+    if d2 >= R2 or d2 == 0.0:
+        return -1.0
+    d = math.sqrt(d2)
+    F = -sigma * kernels.kernel_dfdq(d / R, kernel_code) / (R * d)
+    kj = k[j]
+    ks = ki + kj
+    if ks <= 0.0:
+        return -1.0
+    return A[j] * (2.0 * ki * kj / ks) * (ri + r_cond[j]) * F * 2.0 / (mom[i] + mom[j])
+
+
 @njit(cache=True, parallel=True)
 def heat_rates(x, T, A, k, r_cond, inv_rrc, mom, n, offsets, indices, R, sigma, kernel_code,
                period, out):
@@ -139,18 +158,10 @@ def heat_rates(x, T, A, k, r_cond, inv_rrc, mom, n, offsets, indices, R, sigma, 
         w = 0.0
         for jj in range(offsets[i], offsets[i + 1]):
             j = indices[jj]
-            d0 = x[j, 0] - ri
-            d1 = min_image(x[j, 1] - x[i, 1], period[1])
-            d2 = d0 * d0 + d1 * d1
-            if d2 >= R2 or d2 == 0.0:
+            g = pair_conductance(x, A, k, r_cond, mom, i, j, ri, ki, R, R2, sigma,
+                                 kernel_code, period)
+            if g < 0.0:
                 continue
-            d = math.sqrt(d2)
-            F = -sigma * kernels.kernel_dfdq(d / R, kernel_code) / (R * d)
-            kj = k[j]
-            ks = ki + kj
-            if ks <= 0.0:
-                continue
-            g = A[j] * (2.0 * ki * kj / ks) * (ri + r_cond[j]) * F * 2.0 / (mom[i] + mom[j])
             s += g * (T[j] - T[i])
             w += g
         out[i] = s * inv_rrc[i]
@@ -219,18 +230,10 @@ def heat_conductances(x, A, k, r_cond, inv_rrc, mom, n, offsets, indices, R, sig
         pos = offsets[i]
         for jj in range(offsets[i], offsets[i + 1]):
             j = indices[jj]
-            d0 = x[j, 0] - ri
-            d1 = min_image(x[j, 1] - x[i, 1], period[1])
-            d2 = d0 * d0 + d1 * d1
-            if d2 >= R2 or d2 == 0.0:
+            g = pair_conductance(x, A, k, r_cond, mom, i, j, ri, ki, R, R2, sigma,
+                                 kernel_code, period)
+            if g < 0.0:
                 continue
-            d = math.sqrt(d2)
-            F = -sigma * kernels.kernel_dfdq(d / R, kernel_code) / (R * d)
-            kj = k[j]
-            ks = ki + kj
-            if ks <= 0.0:
-                continue
-            g = A[j] * (2.0 * ki * kj / ks) * (ri + r_cond[j]) * F * 2.0 / (mom[i] + mom[j])
             pair_j[pos] = j
             pair_g[pos] = g
             pos += 1
