@@ -60,3 +60,46 @@ def test_speed_criteria_quick_gates_only_balance_and_contact():
     crit, _ = di.speed_criteria(50.0, levels, manufactured(levels, 50.0, 40.0), quick=True)
     assert set(crit) == {"50 m/s balance", "50 m/s contact T"}
     assert math.isclose(crit["50 m/s balance"].value, 1e-14)
+
+
+def _convergence_script():
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).parents[1] / "examples" / "droplet_impact" / "convergence.py"
+    spec = importlib.util.spec_from_file_location("droplet_convergence", path)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+def test_convergence_script_reads_levels_from_an_earlier_json(tmp_path, capsys):
+    """convergence.py --figures-from: levels whose figures are in an earlier
+    convergence_V*.json are not run again, and the criteria come out as from the file's own
+    figures; a file of another speed or end time is refused."""
+    import json
+
+    conv = _convergence_script()
+    levels = (64, 90, 128)
+    figs = manufactured(levels, 10.0, C=0.5)
+    for f in figs:
+        f.update(t_end=4.0 * f["tc"], wall_s=1.0, correlations=list(f["correlations"]))
+    src = tmp_path / "earlier.json"
+    src.write_text(json.dumps({"speed": 10.0, "levels": list(levels), "figures": figs}))
+    out = tmp_path / "out"
+    rc = conv.main(["10", "--out", str(out), "--levels", *map(str, levels),
+                    "--t-end-tc", "4", "--figures-from", str(src)])
+    printed = capsys.readouterr().out
+    assert printed.count("figures from") == 3
+    assert not any(p.is_dir() for p in out.iterdir())  # nothing was run
+    res = json.loads((out / "convergence_V10.json").read_text())
+    crit, _ = di.speed_criteria(10.0, levels, figs)
+    assert rc == (0 if all(c.passed for c in crit.values()) else 1)
+    assert {k: v["passed"] for k, v in res["criteria"].items()} == {
+        k: bool(c.passed) for k, c in crit.items()}
+    with pytest.raises(SystemExit, match="ended at 4 t_c, not 6"):
+        conv.main(["10", "--out", str(out), "--levels", *map(str, levels),
+                   "--t-end-tc", "6", "--figures-from", str(src)])
+    with pytest.raises(SystemExit, match="speed 10.0 m/s, not 30"):
+        conv.main(["30", "--out", str(out), "--levels", *map(str, levels),
+                   "--t-end-tc", "4", "--figures-from", str(src)])

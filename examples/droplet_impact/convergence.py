@@ -1,7 +1,7 @@
 """One impact speed of the ``droplet-impact`` validation, run level by level and resumable.
 
     python examples/droplet_impact/convergence.py SPEED --out DIR [--levels N N N ...]
-                                                  [--t-end-tc T] [--threads K]
+                                                  [--t-end-tc T] [--figures-from JSON ...]
 
 Runs the validation's scene (:func:`sphfem.validation.droplet_impact.scene_at`) at SPEED
 [m/s] and each level N (particles across the droplet; default: the case's own three,
@@ -14,6 +14,11 @@ this speed (:func:`~sphfem.validation.droplet_impact.speed_criteria`, from all t
 given), and writes ``DIR/convergence_V{SPEED}.json`` and a figure ``.png``: the four
 figures against dx with the Richardson limit and its error bar, and the spread against
 the band of the published correlations.
+
+``--figures-from`` takes the figures of levels run elsewhere (another machine, an earlier
+session whose run folders are gone) from an earlier ``convergence_V{SPEED}.json``: a level
+given with ``--levels`` that has no completed folder in DIR but whose figures are in such a
+file (same speed, same end time) is read from it and not run; the printout marks it.
 
 The full case (``sphfem validate droplet-impact``) runs the three speeds in one process;
 this script is the way to run them one at a time, on several machines, or with a finer
@@ -28,26 +33,52 @@ import math
 from pathlib import Path
 
 
+def completed(folder: Path, speed: float, t_end_tc: float) -> dict | None:
+    """The summary of the level in ``folder`` when it has completed to ``t_end_tc``."""
+    done = folder / "summary.json"
+    if not done.exists():
+        return None
+    s = json.loads(done.read_text())
+    drop = next(b for b in s["scene"]["blocks"] if b["kind"] == "fluid")
+    if (s.get("status") == "completed"
+            and s["t"] >= 0.999 * t_end_tc * 2.0 * drop["radius"] / speed):
+        return s
+    return None
+
+
+def earlier_figures(paths, speed: float, t_end_tc: float) -> dict[int, tuple[dict, str]]:
+    """Level -> (figures, file) from earlier ``convergence_V*.json`` files of the same speed
+    and end time (a later file wins); a file of another speed or end time is an error."""
+    out: dict[int, tuple[dict, str]] = {}
+    for path in paths:
+        d = json.loads(Path(path).read_text())
+        if not math.isclose(float(d["speed"]), speed):
+            raise SystemExit(f"--figures-from {path}: speed {d['speed']} m/s, not {speed:g}")
+        for n, f in zip(d["levels"], d["figures"], strict=True):
+            t_tc = f["t_end"] / f["tc"]
+            if abs(t_tc - t_end_tc) > 1e-6 * t_end_tc:
+                raise SystemExit(f"--figures-from {path}: D/dx {n} ended at {t_tc:.4g} t_c, "
+                                 f"not {t_end_tc:g}")
+            out[int(n)] = (f, str(path))
+    return out
+
+
 def run_level(speed: float, n: int, t_end_tc: float, folder: Path) -> dict:
     """The summary of one level, run (or continued) when it has not completed."""
     from sphfem.api import run
     from sphfem.scene import parse_scene
     from sphfem.validation import droplet_impact as di
 
-    done = folder / "summary.json"
-    if done.exists():
-        s = json.loads(done.read_text())
-        drop = next(b for b in s["scene"]["blocks"] if b["kind"] == "fluid")
-        if (s.get("status") == "completed"
-                and s["t"] >= 0.999 * t_end_tc * 2.0 * drop["radius"] / speed):
-            return s
+    s = completed(folder, speed, t_end_tc)
+    if s is not None:
+        return s
     d = di.scene_at(speed, n, t_end_tc)
     d["output"]["every"] = "0.1 tc"
     scene = parse_scene(d, source=f"convergence V={speed:g} D/dx={n}")
     resume = (folder / "checkpoint.npz").exists()
     # the checkpoint is kept, so a later, longer --t-end-tc continues the level
     run(scene, folder, resume=resume, overwrite=not resume, keep_checkpoint=True)
-    return json.loads(done.read_text())
+    return json.loads((folder / "summary.json").read_text())
 
 
 def plot(path: Path, speed: float, levels, figs: list[dict]) -> None:
@@ -95,6 +126,9 @@ def main(argv=None) -> int:
                     help="particles across the droplet, coarse to fine (default: the case's)")
     ap.add_argument("--t-end-tc", type=float, default=None,
                     help="end time in t_c (default: the case's, di.t_end_for)")
+    ap.add_argument("--figures-from", type=Path, nargs="+", default=[],
+                    help="earlier convergence_V*.json files: levels without a completed "
+                         "folder in --out take their figures from these")
     a = ap.parse_args(argv)
 
     from sphfem.output import write_json
@@ -107,11 +141,17 @@ def main(argv=None) -> int:
         ap.error(f"--levels needs at least three positive levels, got {levels}")
     t_end = a.t_end_tc or di.t_end_for(a.speed)
     a.out.mkdir(parents=True, exist_ok=True)
+    earlier = earlier_figures(a.figures_from, a.speed, t_end)
     figs = []
     for n in levels:
-        s = run_level(a.speed, n, t_end, a.out / f"V{a.speed:g}_n{n}")
-        f = di.figures(s, a.speed, 2.0 * next(
-            b for b in s["scene"]["blocks"] if b["kind"] == "fluid")["radius"])
+        folder = a.out / f"V{a.speed:g}_n{n}"
+        if n in earlier and not completed(folder, a.speed, t_end):
+            f, origin = earlier[n]
+            print(f"D/dx {n}: figures from {origin}")
+        else:
+            s = run_level(a.speed, n, t_end, folder)
+            f = di.figures(s, a.speed, 2.0 * next(
+                b for b in s["scene"]["blocks"] if b["kind"] == "fluid")["radius"])
         figs.append(f)
         print(f"D/dx {n}: spread {f['spread']:.3f} heat {f['heat'] * 1e6:.2f} uJ rise "
               f"{f['T_impact']:.2f} K vM {f['vm_peak'] / 1e6:.2f} MPa ({f['wall_s']:.0f} s)",
