@@ -30,6 +30,7 @@ import io
 import json
 import logging
 import math
+import pickle
 import time
 from pathlib import Path
 
@@ -83,6 +84,42 @@ class HeatLedger:
         return {"heat_to_solid_J": q_s, "heat_lost_by_fluid_J": q_f,
                 "heat_to_other_particles_J": q_o,
                 "residual_rel": (q_s + q_o - q_f) / scale}
+
+
+class PickledRecords:
+    """A checkpoint's copy of a record list: the records' pickles (``blobs``, a tuple of
+    bytes); :meth:`records` unpickles them into new dicts equal to the originals."""
+
+    def __init__(self, blobs: tuple):
+        self.blobs = tuple(blobs)
+
+    def records(self) -> list:
+        return [pickle.loads(b) for b in self.blobs]
+
+    def __len__(self) -> int:
+        return len(self.blobs)
+
+
+class RecordPickles:
+    """The pickles of a record list that only grows (records recognised by identity and
+    never changed once appended: the coupling's ``history`` lists), each record pickled
+    once: :meth:`snapshot` pickles the records appended since the last call and returns
+    all as :class:`PickledRecords`; a list replaced or cut (a restored history) is
+    pickled again from the first record that is not the one pickled."""
+
+    def __init__(self):
+        self._done: list[tuple[dict, bytes]] = []
+
+    def snapshot(self, records: list) -> PickledRecords:
+        n = 0
+        for (rec, _), r in zip(self._done, records, strict=False):
+            if rec is not r:
+                break
+            n += 1
+        del self._done[n:]
+        for r in records[n:]:
+            self._done.append((r, pickle.dumps(r, protocol=5)))
+        return PickledRecords(b for _, b in self._done)
 
 
 class CouplingDriver:
@@ -417,6 +454,8 @@ class CouplingModule(PhysicsModule):
         #: the substrate start there); None until then
         self.contact = None
         self.clearance0 = None
+        #: the record lists' pickles per state key (:meth:`checkpoint_state`)
+        self._record_logs: dict = {}
 
     def init(self, ctx) -> None:
         from coupling.backends import FEMBackend, TLSPHBackend
@@ -574,14 +613,30 @@ class CouplingModule(PhysicsModule):
             objs.update(thermal=th, heat=th.heat, interface=th.itf)
         return objs
 
+    #: the attributes of _STATE that are record lists (appended to, a record never changed
+    #: once appended): checkpointed as :class:`PickledRecords`, not deep-copied
+    _RECORDS = {"driver": "history", "thermal": "history"}
+
     def checkpoint_state(self, ctx) -> dict:
         """The records, running peaks, contact time and, with ``[coupling.heat] model =
         "fem-contact"``, the substrate's temperature field and the contact interface's
-        layer state (module docstring of :mod:`coupling.heat_interface`)."""
+        layer state (module docstring of :mod:`coupling.heat_interface`).  The record
+        lists go in as :class:`PickledRecords` (each record pickled once, at the first
+        checkpoint after it was appended: deep-copying the whole history at every
+        checkpoint made the checkpoints' cost quadratic in the run's length), the rest
+        as deep copies."""
         from sphfem.physics import snapshot_attrs
 
-        return {key: snapshot_attrs(obj, self._STATE[key])
-                for key, obj in self._stateful().items()}
+        logs = self._record_logs
+        out = {}
+        for key, obj in self._stateful().items():
+            names = self._STATE[key]
+            rec = self._RECORDS.get(key)
+            st = snapshot_attrs(obj, [a for a in names if a != rec])
+            if rec in names:
+                st[rec] = logs.setdefault(key, RecordPickles()).snapshot(getattr(obj, rec))
+            out[key] = {a: st[a] for a in names}
+        return out
 
     def restore_state(self, ctx, state: dict) -> None:
         objs = self._stateful()
@@ -590,7 +645,7 @@ class CouplingModule(PhysicsModule):
                              f"this scene needs {sorted(objs)}: rerun from t = 0")
         for key, obj in objs.items():
             for a, v in state[key].items():
-                setattr(obj, a, v)
+                setattr(obj, a, v.records() if isinstance(v, PickledRecords) else v)
         if self.driver.thermal is not None:
             self.driver.thermal.heat._lu = {}  # factorised again for the restored H0
 
