@@ -160,6 +160,7 @@ from scipy.spatial import cKDTree
 from scipy.special import erf
 
 from sphfem.fem.heat_transient import ierfc
+from sphfem.heat.stagnation_layer import gauss_legendre
 
 __all__ = ["ContactHeatInterface", "cell_mean_erf", "contact_solution",
            "step_mean_inv_sqrt", "strained_layer_s2", "strained_mean_inv_s",
@@ -232,7 +233,7 @@ def strained_mean_inv_s(s2, a, alpha, tau0, dt, n: int = 8):
     s2, a, tau0 = np.broadcast_arrays(*(np.asarray(v, float) for v in (s2, a, tau0)))
     L = np.maximum(dt - tau0, 0.0)
     t_s = np.maximum(s2, 0.0) / alpha
-    g, gw = np.polynomial.legendre.leggauss(n)
+    g, gw = gauss_legendre(n)
     u0, u1 = np.sqrt(t_s)[..., None], np.sqrt(t_s + L)[..., None]
     u = u0 + 0.5 * (g + 1.0) * (u1 - u0)
     s = np.sqrt(strained_layer_s2(s2[..., None], a[..., None], alpha,
@@ -415,7 +416,7 @@ class ContactHeatInterface:
             e = np.zeros(0)
             return (e.astype(np.int64), e.astype(np.int64), e, np.zeros(nX, bool), z, h)
         # footprint quadrature: n_g Gauss points per lateral axis over [-h/2, h/2]
-        g, gw = np.polynomial.legendre.leggauss(self.n_gauss)
+        g, gw = gauss_legendre(self.n_gauss)
         lat = [a for a in range(self.dim) if a != self.axis]
         grids = np.meshgrid(*[g] * len(lat), indexing="ij")
         off = np.stack([q.ravel() for q in grids], -1) * 0.5          # (nq, L), in [-1/2, 1/2]
@@ -599,17 +600,25 @@ class ContactHeatInterface:
             self.s2[~wet] = np.nan
             s2 = np.where(wet, np.nan_to_num(self.s2), 0.0)
             self.strain = self.node_strain(np.asarray(x, float), v, hh, cols, wet)
+            # the layer of the wetted nodes only (a dry node's is not used: hA = 0 and
+            # s^2 = nan there); every operation is elementwise per node
+            iw = np.flatnonzero(wet)
+            s2_end, inv_s = np.zeros(nX), np.zeros(nX)
             if self.layer == "strained":
-                inv_s = strained_mean_inv_s(s2, self.strain, self.alpha_f, tau0, dt)
-                s2_end = strained_layer_s2(s2, self.strain, self.alpha_f, dt - tau0)
+                inv_s[iw] = strained_mean_inv_s(s2[iw], self.strain[iw], self.alpha_f,
+                                                tau0[iw], dt)
+                s2_end[iw] = strained_layer_s2(s2[iw], self.strain[iw], self.alpha_f,
+                                               dt - tau0[iw])
             else:
                 from sphfem.heat.stagnation_layer import integrate_layer, viscous_layer_rate
 
                 h_node = np.bincount(rows, weights=w * hh[cols], minlength=nX)
                 h_node = np.where(h_node > 0, h_node, float(np.mean(hh)) if hh.size else 1.0)
                 c = 1 if (self.dim == 2 and not self.sub.axisymmetric) else 2
-                rate = viscous_layer_rate(self.strain, h_node, self.nu_f, self.alpha_f, c)
-                s2_end, inv_s = integrate_layer(s2, tau0, dt, rate, self.alpha_f)
+                rate = viscous_layer_rate(self.strain[iw], h_node[iw], self.nu_f,
+                                          self.alpha_f, c)
+                s2_end[iw], inv_s[iw] = integrate_layer(s2[iw], tau0[iw], dt, rate,
+                                                        self.alpha_f)
             hA = np.where(wet, self.strained_conductance(s2, inv_s, rows, cols, w, z, hh,
                                                          nX), 0.0)
             self.s2 = np.where(wet, s2_end, np.nan)

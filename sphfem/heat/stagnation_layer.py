@@ -210,13 +210,25 @@ def viscous_layer_rate(a1, h, nu: float, alpha: float, c: int):
     a_o, delta = outer_strain(a1, h, nu, c)
     pos = a_o > 0.0
     J_star = _J_star(float(nu / alpha), int(c))
+    delta_pos = np.where(pos, delta, 1.0)  # the same at every call of rate
+    two_a_o = 2.0 * a_o
 
     def rate(s2):
         s = np.sqrt(np.maximum(s2, 0.0))
-        visc = alpha * (1.0 - layer_J(s / np.where(pos, delta, 1.0), c) / J_star)
-        return np.where(pos, visc, alpha - 2.0 * a_o * s2)
+        visc = alpha * (1.0 - layer_J(s / delta_pos, c) / J_star)
+        return np.where(pos, visc, alpha - two_a_o * s2)
 
     return rate
+
+
+@functools.lru_cache(maxsize=8)
+def gauss_legendre(n: int):
+    """``np.polynomial.legendre.leggauss(n)`` (points, weights), made once per n (read-only
+    arrays: it costs ~1 ms a call, made at every coupling step before)."""
+    g, gw = np.polynomial.legendre.leggauss(n)
+    g.flags.writeable = False
+    gw.flags.writeable = False
+    return g, gw
 
 
 def integrate_layer(s2, tau0, dt: float, rate, alpha: float, n: int = 8, sub: int = 1):
@@ -229,7 +241,7 @@ def integrate_layer(s2, tau0, dt: float, rate, alpha: float, n: int = 8, sub: in
     L = np.maximum(dt - tau0, 0.0)
     u0 = np.sqrt(np.maximum(s2, 0.0) / alpha)
     u1 = np.sqrt(u0 * u0 + L)
-    g, gw = np.polynomial.legendre.leggauss(n)
+    g, gw = gauss_legendre(n)
     pts = np.concatenate([0.5 * (g + 1.0), [1.0]])       # in [0, 1] of (u - u0) / (u1 - u0)
 
     def du(u, y):  # d(s^2)/du = 2 u rate
