@@ -343,7 +343,8 @@ class TransientHeat:
             AID = self._MID / dt + theta * self._KID if self.D.size else None
             if self.factor == "banded":  # the bands of M and K taken once (_band_parts)
                 bM, bK, diag_s = self._band_parts()
-                ab = bM / dt + theta * bK
+                ab = bM / dt  # + theta bK, in place (theta = 1: bK itself, the same sum)
+                ab += bK if theta == 1.0 else theta * bK
                 ab[0, diag_s] += self.H0
                 lu = (BandedCholesky(ab, self._perm), AID)
             else:
