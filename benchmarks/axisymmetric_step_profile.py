@@ -9,7 +9,8 @@ seconds per step of every numba kernel of the axisymmetric fluid, heat and coupl
 (each dispatcher wrapped by a timer in every module that holds it; the arithmetic is
 untouched) and of the main Python methods (inclusive), the share of the stepping loop's
 CPU, and the modules' totals.  Writes OUT/profile.json.  ``--cprofile P`` also writes a
-cProfile dump (timer: process CPU) of the stepping loop.
+cProfile dump (timer: process CPU) of the stepping loop; ``--substrate-layout appended``
+writes the substrate VTU files as raw appended binary (``sphfem.fem.FEMSeries.layout``).
 """
 
 from __future__ import annotations
@@ -122,6 +123,9 @@ def main(argv=None) -> None:
     ap.add_argument("t_end_tc", type=float)
     ap.add_argument("out", type=Path)
     ap.add_argument("--cprofile", type=Path, default=None)
+    ap.add_argument("--substrate-layout", choices=("inline", "appended"), default=None,
+                    help="sphfem.fem.FEMSeries.layout of the substrate VTU files (default: "
+                         "the class's, inline zlib)")
     ap.add_argument("overrides", nargs="*", help="section.key=value")
     a = ap.parse_intermixed_args(argv)
 
@@ -140,6 +144,10 @@ def main(argv=None) -> None:
     import sphfem.axisymmetric_scene  # noqa: F401
     import sphfem.fluid.axisymmetric  # noqa: F401
 
+    if a.substrate_layout is not None:
+        from sphfem.fem import FEMSeries
+
+        FEMSeries.layout = a.substrate_layout
     acc: dict = {}
     install_timers(acc)
     prepare_output_dir(a.out, overwrite=True)
@@ -160,7 +168,8 @@ def main(argv=None) -> None:
     steps, n = s["steps"], s["particles"]["total"]
     cpu = c1 - c0
     rec = {"V": a.speed, "N": a.per_diameter, "t_end_tc": a.t_end_tc,
-           "overrides": a.overrides, "threads": numba.get_num_threads(), "particles": n,
+           "overrides": a.overrides, "substrate_layout": a.substrate_layout,
+           "threads": numba.get_num_threads(), "particles": n,
            "steps": steps, "run_cpu_s": cpu, "run_wall_s": w1 - w0,
            "cpu_ms_per_step": 1e3 * cpu / steps,
            "particle_steps_per_cpu_s": n * steps / cpu,

@@ -94,3 +94,30 @@ def test_encoded_blocks():
     assert np.frombuffer(raw[:4], np.uint32)[0] == 80000 and raw[4:] == data.tobytes()
     empty = base64.b64decode(encode_data_array(np.zeros(0), "zlib", 1))
     assert np.frombuffer(empty, np.uint32).tolist() == [0, 32768, 32768]
+
+
+@pytest.mark.parametrize("cells", ["tri", "quad"])
+def test_appended_layout_reads_back_the_same_arrays(tmp_path, cells):
+    """``layout = "appended"`` (raw binary, no compression): meshio reads the arrays,
+    points and cells of the inline file back, bit for bit."""
+    sub = _substrate(cells)
+    inline, appended = FEMSeries(tmp_path / "inline"), FEMSeries(tmp_path / "appended")
+    appended.layout = "appended"
+    for k, res in enumerate(_solves(sub)):
+        a = meshio.read(inline.write(1e-6 * k, res))
+        b = meshio.read(appended.write(1e-6 * k, res))
+        assert np.array_equal(a.points, b.points)
+        assert [c.type for c in a.cells] == [c.type for c in b.cells]
+        assert all(np.array_equal(x.data, y.data) for x, y in zip(a.cells, b.cells,
+                                                                  strict=True))
+        assert list(a.point_data) == list(b.point_data)
+        assert all(np.array_equal(a.point_data[n], b.point_data[n]) for n in a.point_data)
+        assert list(a.cell_data) == list(b.cell_data)
+        assert all(np.array_equal(a.cell_data[n][0], b.cell_data[n][0])
+                   for n in a.cell_data)
+    assert (tmp_path / "appended" / "substrate.pvd").read_bytes() == \
+        (tmp_path / "inline" / "substrate.pvd").read_bytes()
+    assert not any(f.name.startswith(".") for f in (tmp_path / "appended").iterdir())
+    appended.layout = "zip"
+    with pytest.raises(ValueError, match="layout"):
+        appended.write(1.0, res)
