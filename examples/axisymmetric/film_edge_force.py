@@ -31,7 +31,7 @@ import numpy as np
 
 
 def film_edge_force(rows: int, wall: bool, rounded: bool, sigma: float = 0.072,
-                    dx: float = 1e-6, length: int = 40) -> float:
+                    dx: float = 1e-6, length: int = 40, film: bool = False) -> float:
     """The CSF force on the outer half of the film over the edge's line force (module
     docstring; 1 is exact)."""
     from sphfem.fluid.axisymmetric import AxisymmetricFluid
@@ -62,7 +62,7 @@ def film_edge_force(rows: int, wall: bool, rounded: bool, sigma: float = 0.072,
     for s in (sigma, 0.0):  # the surface tension's part of the acceleration
         f = AxisymmetricFluid(x, np.zeros((n, 2)), np.full(n, 1000.0), kind, 1000.0 * dx * dx,
                               dx * dx, 3.0 * dx, pa, planar=True, surface_tension=s,
-                              wall_normals=normals if wall else None)
+                              wall_normals=normals if wall else None, film_tension=film)
         f.evaluate()
         acc.append(f.acc.copy())
     force = (acc[0] - acc[1])[:nf] * 1000.0 * dx * dx  # planar masses: N per m of depth
@@ -73,11 +73,12 @@ def film_edge_force(rows: int, wall: bool, rounded: bool, sigma: float = 0.072,
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--rows", type=int, nargs="+", default=[1, 2, 3, 4, 6, 8])
+    ap.add_argument("--film", action="store_true", help="with the CSF's thin-film model")
     a = ap.parse_args(argv)
     print("rows   on a wall: square  rounded   free: square  rounded   (1 = exact)")
     for k in a.rows:
-        w = [film_edge_force(k, True, r) for r in (False, True)]
-        f = [film_edge_force(k, False, r) for r in (False, True)]
+        w = [film_edge_force(k, True, r, film=a.film) for r in (False, True)]
+        f = [film_edge_force(k, False, r, film=a.film) for r in (False, True)]
         print(f"{k:4d}   {w[0]:14.3f} {w[1]:8.3f}   {f[0]:12.3f} {f[1]:8.3f}")
 
 

@@ -692,7 +692,8 @@ class AxisymmetricFluid:
     (for cross-checks against :class:`~sphfem.fluid.wcsph.FluidSolver` in 2D).
 
     ``surface_tension``: sigma [N/m] of the CSF force with the hoop curvature
-    (:mod:`sphfem.fluid.axisymmetric_surface_tension`); 0: off.
+    (:mod:`sphfem.fluid.axisymmetric_surface_tension`); 0: off.  ``film_tension``: its
+    thin-film model (same module, "Thin films"; default off).
 
     ``skin`` (> 0): a Verlet list (Verlet 1967): the neighbour list and the axis mirrors
     reach R (1 + skin) and are reused until R + 2 max_i |x_i - x_i,build| exceeds that
@@ -710,7 +711,7 @@ class AxisymmetricFluid:
                  fragment_incompressible: bool = False, shifting: float = 0.0,
                  wall_tension: bool = True, free_surface_no_tension: bool = False,
                  shift_surface: bool = True, skin: float = 0.0,
-                 wall_friction: str = "sph"):
+                 wall_friction: str = "sph", film_tension: bool = False):
         self.x = np.array(x, dtype=np.float64)
         n = self.n = self.x.shape[0]
         self.v = np.array(v, dtype=np.float64).reshape(n, 2)
@@ -772,7 +773,8 @@ class AxisymmetricFluid:
         self.shift_surface = bool(shift_surface)
         #: largest shift of the last step / h
         self.last_shift = 0.0
-        self.csf = (AxisymmetricCSF(surface_tension, self.kcode, hoop=not self.planar)
+        self.csf = (AxisymmetricCSF(surface_tension, self.kcode, hoop=not self.planar,
+                                    film=film_tension)
                     if surface_tension > 0.0 else None)
         self.wall_normals = None if wall_normals is None else np.asarray(
             wall_normals, float).reshape(n, 2)

@@ -48,6 +48,68 @@ fluid's hook passes its widest fluid support, which is R itself unless ``adaptiv
 adaptive h and the median support instead, a D/dx = 16 impact (10 m/s, sigma = 0.072 N/m)
 blew up at the axis at 1.46 t_c, with the widest it ran to 3 t_c.
 
+Thin films (``film=True``, scene key ``[fluid] film_tension``; default off).  A film thinner
+than the support R has a truncated colour field: its two faces' colour gradients cancel
+(a free film one row thick has g = 0 and no force at all), and on a wall the step of its
+end is a convex and a concave corner closer than R whose curvatures the kernel cancels.
+The pull on the end of a film k rows thick, against the exact line force (2 sigma free,
+sigma (1 - cos theta) = sigma on the CSF's 90-degree wall; the Frenet integral of kappa n
+over the end whatever its shape), is 0.12 / 0.76 / 1.10 / 1.03 / 0.98 sigma on a wall for
+k = 1 / 2 / 3 / 4 / 6 with a square end, 0.12 / 0.36 / 0.74 / 0.67 / 0.67 with a rounded
+one, and 0 / 1.25-1.35 x 2 sigma free (``examples/axisymmetric/film_edge_force.py``).
+The film model writes the surface tension of such a film as what it is across any cut, a
+line tension gamma along the film (Taylor 1959, Culick 1960), i.e. the in-plane stress of
+a membrane, S = tau t t, and its force as the symmetric SPH divergence
+
+    a_i = phi_i / rho_i sum_j A_j (S_i + S_j) . grad_i W_ij    (fluid neighbours)      (F1)
+
+in place of the CSF: a_i = (1 - phi_i) a_CSF,i + (F1) + (F3).  (F1) is antisymmetric, so the
+force on the part of a film beyond a cut is the flux of S through the cut, whatever the
+shape of the end; for a uniform film on a lattice that flux is sum_rows s tau_i M_tt,i
+(s the spacing, M_tt = sum_j A_j F_ij (t . r_ij)^2 the tangential moment, 1 in the bulk),
+so with
+
+    tau_i = gamma_i / Q_i,   Q = sum_j A_j w1(t . r_ij) M_tt,j  (self included, w1 the
+    kernel's shape normalised in 1D: the band sum of M_tt across the film)            (F2)
+
+it is gamma exactly (up to the 1D quadrature of w1: 0.994 gamma at R = 3 dx).  The rows'
+quantities, from fluid neighbours only (walls and wall-plane images are not film):
+
+- t: the larger eigenvector of the Shepard mean of the moment matrices M_j = sum_k A_k
+  F_jk r_jk r_jk (an end row alone has no film direction);
+- the width E_i: the least over its film normal and FILM_DIRECTIONS directions of the
+  extent of the fluid within R, plus sqrt(A_i) (k s for a film of k <= R/s + 1 rows);
+  phi_i = 1 - smoothstep of the largest E over the row and its neighbours from R +
+  FILM_BAND[0] s to R + FILM_BAND[1] s: 1 in films up to R/s + 1 rows (4 at R = 3 dx), 0
+  from one row more, and 0 on the face of thick fluid (its third row sees 5 rows);
+- gamma_i = sigma (2 - c_i), c_i the wall contact: smoothstep(FILM_CONTACT - d_w / s) of
+  the nearest wall row at d_w, spread as the largest over the neighbours' neighbours (the
+  whole film's thickness);
+- Q in (F2) is the largest Q over the row and its neighbours, so that tau stays the film's
+  up to its end (Q of an end row is truncated), and at least FILM_Q_MIN of a one-row
+  film's (:func:`row_moment`): a fragment of two rings closer than a spacing would
+  otherwise get tau ~ 1 / |r|^2 and pull them together as 1 / |r| (a D/dx = 32 impact
+  threw a ring out at 2e4 m/s at 3.6 t_c without the floor).
+
+Axisymmetric: the film's stress is isotropic in its plane, S + tau e_theta e_theta, whose
+divergence in cylindrical coordinates is the planar one plus
+
+    (tau M_tt / r) (t_r t - e_r)                                                       (F3)
+
+(tau M_tt: the stress itself, whose integral across the film is gamma; (F1) needs the
+1 / M_tt of (F2) for its truncated kernel sums, a pointwise term does not.  (F3) is 0 for a
+film normal to the axis, -gamma / r0 per unit area for a cylindrical sheet of radius r0:
+the hoop pull of its two faces), faded to 0 at the axis over AXIS_BAND as the hoop
+curvature.  Measured with the model (``film_edge_force.py --film``; tests/
+test_film_edge_force.py): 0.994 of the exact line force for 1-4 rows, square or rounded end,
+free or on a wall; 5 and 6 rows are the CSF's (phi = 0: 0.99 / 0.70 on a wall, 1.31 / 1.14
+free for 5 rows, square / rounded).  Thick fluid has phi = 0
+exactly, so the static droplet, its oscillation and every other flow without films are
+the CSF's to the bit (test).  Not modelled: a film's own bending (its two faces' curvature
+force 2 sigma kappa on a curved sheet comes from (F1) with the sheet's curvature, as for a
+membrane), contact angles other than 90 degrees, films whose thickness changes over less
+than R (the junction of a film with thick fluid is the blend of the two forces over phi).
+
 Time step (capillary waves, Brackbill et al. 1992): dt <= 0.25 sqrt(rho h^3 / (2 pi sigma))
 (:func:`capillary_dt`; not among the fluid's own limits: callers take the minimum).
 
@@ -74,6 +136,7 @@ from numba import njit, prange
 
 from sphfem import kernels
 from sphfem.axisymmetric import MIRROR_FLUID, MIRROR_WALL
+from sphfem.fluid.passes import grad_factor
 from sphfem.fluid.surface_tension_csf import (
     DELTA_FACTOR,
     NORMAL_HI,
@@ -85,10 +148,24 @@ from sphfem.fluid.surface_tension_csf import (
     csf_normals,
     csf_state,
 )
+from sphfem.kernels import kernel_f
 from sphfem.particles import FLUID, WALL
+from sphfem.smallmat import pair_sep
 
 #: the hoop curvature blends from kappa_m (r < a R) to -n_r / r (r > b R), R the support
 AXIS_BAND = (0.5, 1.5)
+#: film model: a row is in a thin film where the largest normal extent E of the fluid seen
+#: by it and its neighbours is below R + FILM_BAND[0] s, not at all above R + FILM_BAND[1] s
+#: (s the row's spacing sqrt(A); smoothstep between)
+FILM_BAND = (1.25, 1.75)
+#: film model: rows with a wall row closer than (2 - a) s, a in [0, 1], touch the wall with
+#: weight smoothstep(a) (the first fluid row on a wall lattice lies one spacing from it)
+FILM_CONTACT = 2.0
+#: film model: the width of the fluid around a row is its least extent over its own normal
+#: and this many equally spaced directions
+FILM_DIRECTIONS = 8
+#: film model: floor of Q in (F2), as a fraction of a one-row film's
+FILM_Q_MIN = 0.5
 
 
 @njit(cache=True)
@@ -115,6 +192,258 @@ def mirror_scalar(n, src, a):
         a[n + q] = a[src[q]]
 
 
+@njit(cache=True, inline="always")
+def _smoothstep(a):
+    if a <= 0.0:
+        return 0.0
+    if a >= 1.0:
+        return 1.0
+    return a * a * (3.0 - 2.0 * a)
+
+
+@njit(cache=True, parallel=True)
+def film_moments(x, A, fl, wl, n, offsets, indices, R, fac2, kernel_code, period, M, dwall):
+    """Fluid-only moment matrix M_i = sum_j A_j F_ij r_ij r_ij (j != i fluid-like, ``fl``;
+    the identity in the bulk), stored (M_rr, M_rz, M_zz), and the distance ``dwall`` to the
+    nearest wall-like row (``wl``; inf without one) of the real fluid rows i < n."""
+    R2 = R * R
+    periodic = period[0] > 0.0 or period[1] > 0.0
+    for i in prange(n):
+        M[i, 0] = 0.0
+        M[i, 1] = 0.0
+        M[i, 2] = 0.0
+        dwall[i] = np.inf
+        if not fl[i]:
+            continue
+        a = 0.0
+        b = 0.0
+        c = 0.0
+        dw = np.inf
+        for jj in range(offsets[i], offsets[i + 1]):
+            j = indices[jj]
+            if not (fl[j] or wl[j]):
+                continue
+            r0, r1, r2 = pair_sep(x, i, j, 2, period, periodic)
+            d2 = r0 * r0 + r1 * r1
+            if d2 >= R2 or d2 == 0.0:
+                continue
+            if wl[j]:
+                dw = min(dw, math.sqrt(d2))
+                continue
+            t = A[j] * grad_factor(math.sqrt(d2), R, fac2, kernel_code)
+            a += t * r0 * r0
+            b += t * r0 * r1
+            c += t * r1 * r1
+        M[i, 0] = a
+        M[i, 1] = b
+        M[i, 2] = c
+        dwall[i] = dw
+
+
+@njit(cache=True, parallel=True)
+def film_smooth(x, A, fl, n, offsets, indices, R, sigma, kernel_code, period, M, Mbar):
+    """Shepard mean ``Mbar`` of the moment matrices ``M`` over the fluid-like neighbours
+    and the row itself, of the real fluid rows (its larger eigenvector is the film's
+    tangent, which a row at the film's end does not have on its own)."""
+    R2 = R * R
+    periodic = period[0] > 0.0 or period[1] > 0.0
+    w0 = sigma * kernel_f(0.0, kernel_code)
+    for i in prange(n):
+        Mbar[i, 0] = 0.0
+        Mbar[i, 1] = 0.0
+        Mbar[i, 2] = 0.0
+        if not fl[i]:
+            continue
+        den = A[i] * w0
+        a = den * M[i, 0]
+        b = den * M[i, 1]
+        c = den * M[i, 2]
+        for jj in range(offsets[i], offsets[i + 1]):
+            j = indices[jj]
+            if not fl[j]:
+                continue
+            r0, r1, r2 = pair_sep(x, i, j, 2, period, periodic)
+            d2 = r0 * r0 + r1 * r1
+            if d2 >= R2 or d2 == 0.0:
+                continue
+            w = A[j] * sigma * kernel_f(math.sqrt(d2) / R, kernel_code)
+            den += w
+            a += w * M[j, 0]
+            b += w * M[j, 1]
+            c += w * M[j, 2]
+        Mbar[i, 0] = a / den
+        Mbar[i, 1] = b / den
+        Mbar[i, 2] = c / den
+
+
+@njit(cache=True, parallel=True)
+def film_extent(x, A, fl, n, offsets, indices, R, sigma1, kernel_code, period, tang, ndir, M,
+                ext, Q):
+    """Width ``ext`` of the fluid within R of each real fluid row: the least over its film
+    normal (normal to ``tang``) and ``ndir`` equally spaced directions of max - min of the
+    projections of r_ij on them (fluid-like neighbours and the row itself), plus its
+    spacing sqrt(A_i); and the film's tangential moment per unit length Q_i = sum_j A_j
+    w1(t_i . r_ij) t_i . M_j . t_i (self included; w1 the kernel's shape normalised in 1D
+    by ``sigma1``): sum_rows s M_tt of the film's cross-section when it lies within R."""
+    R2 = R * R
+    periodic = period[0] > 0.0 or period[1] > 0.0
+    nd = ndir + 1
+    for i in prange(n):
+        ext[i] = 0.0
+        Q[i] = 0.0
+        if not fl[i]:
+            continue
+        t0 = tang[i, 0]
+        t1 = tang[i, 1]
+        d0 = np.empty(nd)
+        d1 = np.empty(nd)
+        lo = np.zeros(nd)
+        hi = np.zeros(nd)
+        d0[0] = -t1
+        d1[0] = t0
+        for k in range(ndir):
+            a = math.pi * k / ndir
+            d0[k + 1] = math.cos(a)
+            d1[k + 1] = math.sin(a)
+        q = A[i] * sigma1 * kernel_f(0.0, kernel_code) * (
+            t0 * t0 * M[i, 0] + 2.0 * t0 * t1 * M[i, 1] + t1 * t1 * M[i, 2])
+        for jj in range(offsets[i], offsets[i + 1]):
+            j = indices[jj]
+            if not fl[j]:
+                continue
+            r0, r1, r2 = pair_sep(x, i, j, 2, period, periodic)
+            d2 = r0 * r0 + r1 * r1
+            if d2 >= R2 or d2 == 0.0:
+                continue
+            for k in range(nd):
+                p = d0[k] * r0 + d1[k] * r1
+                lo[k] = min(lo[k], p)
+                hi[k] = max(hi[k], p)
+            mtt = t0 * t0 * M[j, 0] + 2.0 * t0 * t1 * M[j, 1] + t1 * t1 * M[j, 2]
+            q += A[j] * sigma1 * kernel_f(abs(t0 * r0 + t1 * r1) / R, kernel_code) * mtt
+        w = hi[0] - lo[0]
+        for k in range(1, nd):
+            w = min(w, hi[k] - lo[k])
+        ext[i] = w + math.sqrt(A[i])
+        Q[i] = q
+
+
+@njit(cache=True, parallel=True)
+def film_spread(x, A, fl, n, offsets, indices, R, period, ext, contact, Q, band_lo, band_hi,
+                phi, touch, Qmax):
+    """Film weight ``phi`` (1 - smoothstep of the largest ``ext`` over the row and its
+    fluid-like neighbours, from R + band_lo s to R + band_hi s), wall contact ``touch``
+    and ``Qmax`` (the largest ``contact`` and ``Q`` over the same rows) of the real fluid
+    rows."""
+    R2 = R * R
+    periodic = period[0] > 0.0 or period[1] > 0.0
+    for i in prange(n):
+        phi[i] = 0.0
+        touch[i] = 0.0
+        Qmax[i] = 0.0
+        if not fl[i]:
+            continue
+        e = ext[i]
+        c = contact[i]
+        qm = Q[i]
+        for jj in range(offsets[i], offsets[i + 1]):
+            j = indices[jj]
+            if not fl[j]:
+                continue
+            r0, r1, r2 = pair_sep(x, i, j, 2, period, periodic)
+            d2 = r0 * r0 + r1 * r1
+            if d2 >= R2 or d2 == 0.0:
+                continue
+            e = max(e, ext[j])
+            c = max(c, contact[j])
+            qm = max(qm, Q[j])
+        s = math.sqrt(A[i])
+        phi[i] = 1.0 - _smoothstep((e - R - band_lo * s) / ((band_hi - band_lo) * s))
+        touch[i] = c
+        Qmax[i] = qm
+
+
+@njit(cache=True, parallel=True)
+def film_max(x, fl, n, offsets, indices, R, period, a, out):
+    """out_i = the largest ``a`` over the real fluid row i and its fluid-like neighbours."""
+    R2 = R * R
+    periodic = period[0] > 0.0 or period[1] > 0.0
+    for i in prange(n):
+        out[i] = 0.0
+        if not fl[i]:
+            continue
+        v = a[i]
+        for jj in range(offsets[i], offsets[i + 1]):
+            j = indices[jj]
+            if not fl[j]:
+                continue
+            r0, r1, r2 = pair_sep(x, i, j, 2, period, periodic)
+            d2 = r0 * r0 + r1 * r1
+            if d2 >= R2 or d2 == 0.0:
+                continue
+            v = max(v, a[j])
+        out[i] = v
+
+
+@njit(cache=True, parallel=True)
+def film_force(x, A, rho, fl, n, offsets, indices, R, fac2, kernel_code, period, S, phi, acc):
+    """acc[i] = phi_i / rho_i sum_j A_j (S_i + S_j) . grad_i W_ij over the fluid-like
+    neighbours (the planar divergence of the film stress S = (S_rr, S_rz, S_zz) in the
+    symmetric pair form) of the real fluid rows with phi_i > 0; 0 elsewhere."""
+    R2 = R * R
+    periodic = period[0] > 0.0 or period[1] > 0.0
+    for i in prange(n):
+        acc[i, 0] = 0.0
+        acc[i, 1] = 0.0
+        if not fl[i] or phi[i] == 0.0:
+            continue
+        f0 = 0.0
+        f1 = 0.0
+        for jj in range(offsets[i], offsets[i + 1]):
+            j = indices[jj]
+            if not fl[j]:
+                continue
+            r0, r1, r2 = pair_sep(x, i, j, 2, period, periodic)
+            d2 = r0 * r0 + r1 * r1
+            if d2 >= R2 or d2 == 0.0:
+                continue
+            t = A[j] * grad_factor(math.sqrt(d2), R, fac2, kernel_code)
+            srr = S[i, 0] + S[j, 0]
+            srz = S[i, 1] + S[j, 1]
+            szz = S[i, 2] + S[j, 2]
+            f0 += t * (srr * r0 + srz * r1)
+            f1 += t * (srz * r0 + szz * r1)
+        acc[i, 0] = phi[i] * f0 / rho[i]
+        acc[i, 1] = phi[i] * f1 / rho[i]
+
+
+@njit(cache=True)
+def mirror_tensor(n, src, mtype, S):
+    """Copy the symmetric tensor rows (S_rr, S_rz, S_zz) of the sources onto the mirrors
+    n + q, in order; S_rz is odd across the axis and across a wall plane."""
+    for q in range(src.shape[0]):
+        s = src[q]
+        k = n + q
+        S[k, 0] = S[s, 0]
+        S[k, 1] = -S[s, 1]
+        S[k, 2] = S[s, 2]
+
+
+@njit(cache=True)
+def mirror_flags(n, src, mtype, fl, wl):
+    """Fluid-like (``fl``) and wall-like (``wl``) mirrors, in order: an axis image keeps
+    its source's, a wall-plane image of the fluid stands for the wall."""
+    for q in range(src.shape[0]):
+        s = src[q]
+        k = n + q
+        if mtype[q] == 0:
+            fl[k] = fl[s]
+            wl[k] = wl[s]
+        else:
+            fl[k] = False
+            wl[k] = True
+
+
 @njit(cache=True, parallel=True)
 def hoop_curvature(r, g, omega, kappa_m, r_in, r_out, kappa_h):
     """Hoop curvature ``kappa_h`` of the rows with a valid normal (omega > 0; 0 elsewhere):
@@ -135,6 +464,29 @@ def hoop_curvature(r, g, omega, kappa_m, r_in, r_out, kappa_h):
             gn = math.sqrt(g[i, 0] * g[i, 0] + g[i, 1] * g[i, 1])
             k = -g[i, 0] / (gn * r[i])
         kappa_h[i] = s * k + (1.0 - s) * kappa_m[i]
+
+
+@njit(cache=True)
+def _row_moment(s, R, fac2, kernel_code, out):
+    for i in range(s.shape[0]):
+        q = 0.0
+        if s[i] > 0.0:
+            m = 1
+            while m * s[i] < R:
+                d = m * s[i]
+                q += 2.0 * s[i] * s[i] * grad_factor(d, R, fac2, kernel_code) * d * d
+                m += 1
+        out[i] = s[i] * q
+
+
+def row_moment(s, R, kernel_code) -> np.ndarray:
+    """Q of a film one row thick with spacing ``s`` (array): s sum_{m != 0} s^2 F(|m| s)
+    (m s)^2 (the band sum of (F2) with its 1D quadrature taken as exact)."""
+    s = np.ascontiguousarray(s, dtype=np.float64)
+    out = np.empty_like(s)
+    _row_moment(s, float(R), kernels.kernel_sigma(kernel_code, 2, R) / (R * R),
+                int(kernel_code), out)
+    return out
 
 
 def colour_kinds(kind) -> np.ndarray:
@@ -188,15 +540,21 @@ class AxisymmetricCSF:
     """
 
     def __init__(self, sigma: float, kernel_code: int = kernels.WENDLAND_C2,
-                 axis_band=AXIS_BAND, hoop: bool = True):
+                 axis_band=AXIS_BAND, hoop: bool = True, film: bool = False):
         if not sigma >= 0.0:
             raise ValueError(f"surface tension sigma must be >= 0, got {sigma}")
         self.sigma = float(sigma)
         self.kernel_code = int(kernel_code)
         self.axis_band = tuple(float(a) for a in axis_band)
         self.hoop = bool(hoop)
+        #: the film model (module docstring, "Thin films"): off by default
+        self.film = bool(film)
         self.state = None
         self.kappa_m = self.kappa_h = np.zeros(0)
+        #: film model, real rows of the last evaluation: weight phi, wall contact, the
+        #: film stress (S_rr, S_rz, S_zz) and the film force's acceleration
+        self.film_phi = self.film_touch = np.zeros(0)
+        self.film_stress = self.film_acc = np.zeros((0, 2))
 
     def accumulate(self, x, A, rho, kind, offsets, indices, n, src, mtype, R, Lz, acc):
         """acc[:n] += CSF acceleration of the real rows.  ``x``, ``A``, ``rho``, ``kind``:
@@ -225,5 +583,77 @@ class AxisymmetricCSF:
         work = np.zeros((m, 2))
         csf_force(x, A, rho, kc, offsets, indices, R, ks, kcode, period, self.sigma,
                   DELTA_FACTOR, SHEPARD_MIN, st.g, st.omega, st.kappa, st.kbar, work)
-        acc[:n] += work[:n]
+        if not self.film:
+            acc[:n] += work[:n]
+            return st
+        phi, fa = self.film_forces(x, A, rho, kind, offsets, indices, n, src, mtype, R, period)
+        acc[:n] += (1.0 - phi)[:, None] * work[:n] + fa
         return st
+
+    def film_forces(self, x, A, rho, kind, offsets, indices, n, src, mtype, R, period):
+        """The film model's weight phi and acceleration of the real rows (module docstring,
+        "Thin films")."""
+        m = x.shape[0]
+        kcode = self.kernel_code
+        fac2 = kernels.kernel_sigma(kcode, 2, R) / (R * R)
+        fl = np.zeros(m, np.bool_)
+        wl = np.zeros(m, np.bool_)
+        fl[:n] = kind[:n] == FLUID
+        wl[:n] = kind[:n] == WALL
+        mirror_flags(n, src, mtype, fl, wl)
+        M = np.zeros((m, 3))
+        dwall = np.full(m, np.inf)
+        film_moments(x, A, fl, wl, n, offsets, indices, R, fac2, kcode, period, M, dwall)
+        mirror_tensor(n, src, mtype, M)
+        Mb = np.zeros((m, 3))
+        film_smooth(x, A, fl, n, offsets, indices, R, kernels.kernel_sigma(kcode, 2, R), kcode,
+                    period, M, Mb)
+        th = 0.5 * np.arctan2(2.0 * Mb[:, 1], Mb[:, 0] - Mb[:, 2])  # larger eigenvector
+        tang = np.column_stack([np.cos(th), np.sin(th)])
+        ext = np.zeros(m)
+        Q = np.zeros(m)
+        film_extent(x, A, fl, n, offsets, indices, R, kernels.kernel_sigma(kcode, 1, R), kcode,
+                    period, tang, FILM_DIRECTIONS, M, ext, Q)
+        sp = np.sqrt(np.maximum(A, 1e-300))
+        contact = np.zeros(m)
+        u = np.clip(FILM_CONTACT - dwall[:n] / sp[:n], 0.0, 1.0)
+        contact[:n] = np.where(fl[:n], u * u * (3.0 - 2.0 * u), 0.0)
+        for a in (ext, contact, Q):
+            mirror_scalar(n, src, a)
+        phi = np.zeros(m)
+        touch = np.zeros(m)
+        Qm = np.zeros(m)
+        film_spread(x, A, fl, n, offsets, indices, R, period, ext, contact, Q, FILM_BAND[0],
+                    FILM_BAND[1], phi, touch, Qm)
+        mirror_scalar(n, src, touch)  # a second hop: the wall seen across the whole film
+        t2 = np.zeros(m)
+        film_max(x, fl, n, offsets, indices, R, period, touch, t2)
+        touch = t2
+        gamma = self.sigma * (2.0 - touch)
+        ok = fl.copy()
+        ok[n:] = False
+        # Q no less than FILM_Q_MIN of a one-row film's (fragments of a few close rings
+        # would otherwise get tau ~ 1 / |r|^2 and attract as 1 / |r|)
+        Qm = np.maximum(Qm, FILM_Q_MIN * row_moment(sp, R, kcode))
+        tau = np.where(ok, gamma / Qm, 0.0)
+        S = tau[:, None] * np.column_stack([tang[:, 0] ** 2, tang[:, 0] * tang[:, 1],
+                                             tang[:, 1] ** 2])
+        mirror_tensor(n, src, mtype, S)
+        fa = np.zeros((m, 2))
+        film_force(x, A, rho, fl, n, offsets, indices, R, fac2, kcode, period, S, phi, fa)
+        fa = fa[:n]
+        if self.hoop:  # (tau / r)(t_r t - e_r) of the film's in-plane hoop stress, eq. (F3)
+            r = np.abs(x[:n, 0])
+            lo, hi = self.axis_band[0] * R, self.axis_band[1] * R
+            u = np.clip((r - lo) / (hi - lo), 0.0, 1.0)
+            w = np.where(phi[:n] > 0.0, phi[:n] * u * u * (3.0 - 2.0 * u), 0.0)
+            t0, t1 = tang[:n, 0], tang[:n, 1]
+            mtt = t0 * t0 * M[:n, 0] + 2.0 * t0 * t1 * M[:n, 1] + t1 * t1 * M[:n, 2]
+            k = w * tau[:n] * mtt / (np.maximum(r, 1e-300) * rho[:n])
+            fa[:, 0] += k * (tang[:n, 0] ** 2 - 1.0)
+            fa[:, 1] += k * tang[:n, 0] * tang[:n, 1]
+        self.film_phi = phi[:n].copy()
+        self.film_touch = touch[:n].copy()
+        self.film_stress = S[:n].copy()
+        self.film_acc = fa.copy()
+        return phi[:n], fa
