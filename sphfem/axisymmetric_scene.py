@@ -288,7 +288,8 @@ class AxisymmetricFluidModule(PhysicsModule):
             surface_tension=self.sigma_st,
             shifting=(self.params.shifting_coef if self.params.shifting != "none" else 0.0),
             shift_surface=self.params.shifting == "all", skin=self.SKIN,
-            wall_friction=self.scene.fluid.wall_friction, **self.fluid_options)
+            wall_friction=self.scene.fluid.wall_friction,
+            film_tension=self.scene.fluid.film_tension, **self.fluid_options)
         self.nrm = nrm
         wl = np.flatnonzero(kind == WALL)
         self._walls = wl

@@ -46,6 +46,9 @@ def _check(rec, ctx, path):
     if rec.wall_friction != "sph" and getattr(meta, "geometry", None) != "axisymmetric":
         ctx.error(f"{path}.wall_friction", f"wall_friction = \"{rec.wall_friction}\" is "
                   "implemented for geometry = \"axisymmetric\" only (use \"sph\")")
+    if rec.film_tension and getattr(meta, "geometry", None) != "axisymmetric":
+        ctx.error(f"{path}.film_tension", "film_tension is implemented for geometry = "
+                  "\"axisymmetric\" only")
     names, mats = _fluid_materials(ctx)
     if not names:
         ctx.error("physics.modules", "the fluid module needs at least one block of kind "
@@ -97,6 +100,11 @@ FLUID = Section("fluid", (
               "layer = the viscous term scaled to the traction mu U / delta of a wall layer "
               "thinner than the spacing, d(delta^2)/dt = pi nu - 2 a delta^2 "
               "(sphfem.fluid.wall_layer), no artificial viscosity on wall pairs"),
+    Param("film_tension", bool, False,
+          doc="axisymmetric CSF: films thinner than about the kernel support carry the "
+              "line tension of their faces as a membrane stress (2 sigma free, sigma on a "
+              "wall) instead of the CSF, whose truncated colour field gives their ends "
+              "0-76 % of it (sphfem.fluid.axisymmetric_surface_tension, \"Thin films\")"),
     Param("gravity", VECTOR, lambda dim: (0.0,) * dim, unit="m/s^2", default_doc="zeros",
           quantity="acceleration", doc="body force per unit mass"),
     Param("gravity_ramp", float, 0.0, unit="s", ge=0.0, quantity="time",
