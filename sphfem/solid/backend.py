@@ -18,9 +18,10 @@ u = 0 and the exact hydrostatic stress to round-off.  (Holding the normal compon
 particle layers instead is not exact: the stress divergence of the free particles within
 2R of the face sees the truncated B0 of the held ones, 0.5 % stress error with 3 layers.)
 A roller holding only tangential components holds them on ``roller_layers`` layers.
-:meth:`TLSPHSubstrate.solve` relaxes the body to the
-quasi-static state under the given loads (dynamic relaxation,
-:func:`sphfem.solid.integrate.relax`), warm-started from the previous solution.
+:meth:`TLSPHSubstrate.solve` brings the body to the
+quasi-static state under the given loads, warm-started from the previous solution:
+``solver="newton"`` (default) by Newton-Krylov (:func:`sphfem.solid.implicit.static_solve`),
+``"relax"`` by dynamic relaxation (:func:`sphfem.solid.integrate.relax`).
 
 Loads: ``dT_nodal`` / ``T_nodal`` -- scalar, callable of the reference coordinates
 (dim, n) as in FEMSubstrate, or an array with one value per body particle (``X``);
@@ -153,7 +154,7 @@ class TLSPHSubstrate(QuasiStaticSubstrate):
                  support_factor: float = 3.0, hourglass: float = 10.0,
                  clamp_layers: int | None = None, roller_layers: int | None = None,
                  tol: float = 1e-6,
-                 max_steps: int = 200000):
+                 max_steps: int = 200000, solver: str = "newton"):
         t0 = time.perf_counter()
         lo = np.asarray(lo, float)
         hi = np.asarray(hi, float)
@@ -161,6 +162,10 @@ class TLSPHSubstrate(QuasiStaticSubstrate):
         self.lo, self.hi, self.dx = lo, hi, float(dx)
         self.E, self.nu, self.alpha, self.T0 = float(E), float(nu), float(alpha), float(T0)
         self.tol, self.max_steps = tol, max_steps
+        if solver not in ("newton", "relax"):
+            raise ValueError(f"TL-SPH substrate solver {solver!r}: expected \"newton\" or "
+                             "\"relax\"")
+        self.solver = solver
         faces = face_axes(self.dim)
         clamps = [clamps] if isinstance(clamps, str) else list(clamps)
         rollers = dict(rollers or {})
@@ -280,9 +285,19 @@ class TLSPHSubstrate(QuasiStaticSubstrate):
         self._set_loads(dT, tractions, point_forces, snap, body_force)
 
     def _respond(self, loads, info: dict) -> np.ndarray:
-        """Relax to the quasi-static state (warm-started from the previous one); the
-        Cauchy stress of the body particles.  ``info``: the relaxation's figures."""
-        info.update(relax(self.body, tol=self.tol, max_steps=self.max_steps))
+        """Solve for the quasi-static state (warm-started from the previous one): Newton-
+        Krylov (``solver = "newton"``, :func:`sphfem.solid.implicit.static_solve`) or
+        dynamic relaxation (``"relax"``), both to ||f_int + f_ext|| <= tol * load; the
+        Cauchy stress of the body particles.  ``info``: the solver's figures (``steps``:
+        relaxation steps, or force evaluations of the Newton solve)."""
+        if self.solver == "newton":
+            from sphfem.solid.implicit import static_solve
+
+            r = static_solve(self.body, tol=self.tol)
+            r.pop("history")
+        else:
+            r = relax(self.body, tol=self.tol, max_steps=self.max_steps)
+        info.update(r)
         self.relax_steps.append(info["steps"])
         self.body.internal_forces()
         return self.body.cauchy()[self.inside]
@@ -293,7 +308,7 @@ class TLSPHSubstrate(QuasiStaticSubstrate):
                            b.theta[self.inside] - self.T0, info)
 
     def diagnostics(self) -> dict:
-        return {"backend": "tlsph", "particles": self.n_particles,
+        return {"backend": "tlsph", "solver": self.solver, "particles": self.n_particles,
                 "held_particles": int(self.body.n - self.n_particles), "dx": self.dx,
                 "solves": self.n_solves, "relax_steps": list(self.relax_steps),
                 "setup_s": self.timings["setup"], **self.body.diagnostics()}

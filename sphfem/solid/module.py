@@ -24,7 +24,12 @@ Integrators (``[tlsph] integrator``):
   same limit); a step that does not converge stops the run with the iteration history, or
   (``on_failure = "substep"``) is redone as explicit Verlet sub-steps and counted;
 * ``relax`` -- quasi-static: :func:`~sphfem.solid.integrate.relax` to equilibrium under the
-  loads of the step (temperature, tractions), warm-started from the previous state.
+  loads of the step (temperature, tractions), warm-started from the previous state;
+* ``newton`` -- quasi-static as ``relax``, solved by Newton-Krylov
+  (:func:`~sphfem.solid.implicit.static_solve`, same convergence test on ``relax_tol``);
+* ``implicit`` -- the trapezoidal rule of ``trapezoid`` solved by Newton-Krylov
+  (:func:`~sphfem.solid.implicit.newmark_step`) at any ``dt`` (default 10 x the explicit
+  limit); ``tol`` bounds the position error of the solve (in dx).
 
 Energies in the diagnostics (per unit depth in 2D): kinetic, strain (free energy of the
 SVK material), hourglass (pseudo-potential of the hourglass forces), external potential
@@ -207,6 +212,8 @@ class TLSPHModule(PhysicsModule):
             return {cfg.integrator: cfg.dt}
         if cfg.integrator == "trapezoid":
             return {"trapezoid": self.dt_explicit}
+        if cfg.integrator == "implicit":
+            return {"implicit": 10.0 * self.dt_explicit}
         return {"quasi_static": self.scene.time.t_end}
 
     def step(self, ctx, dt: float) -> None:
@@ -241,15 +248,30 @@ class TLSPHModule(PhysicsModule):
                     verlet_step(body, dt / m)
                 st["fallbacks"] += 1
                 st["fallback_substeps"] += m
+        elif cfg.integrator == "implicit":
+            from sphfem.solid.implicit import newmark_step
+
+            try:
+                info = newmark_step(body, dt, tol=cfg.tol, step_index=ctx.step)
+            except SolidConvergenceError as e:
+                raise SimulationStopped(str(e)) from None
+            st["iterations"] += info["newton"] + info["krylov"]
+            st["max_iterations"] = max(st["max_iterations"],
+                                       info["newton"] + info["krylov"])
         else:
-            info = relax(body, tol=cfg.relax_tol, max_steps=cfg.relax_max_steps,
-                         raise_on_fail=False)
+            if cfg.integrator == "newton":
+                from sphfem.solid.implicit import static_solve
+
+                info = static_solve(body, tol=cfg.relax_tol, raise_on_fail=False)
+            else:
+                info = relax(body, tol=cfg.relax_tol, max_steps=cfg.relax_max_steps,
+                             raise_on_fail=False)
             st["relax_steps"] += info["steps"]
             st["max_relax_steps"] = max(st["max_relax_steps"], info["steps"])
             st["relax_residual"] = info["residual"]
             if not info["converged"]:
                 raise SimulationStopped(
-                    f"tlsph: dynamic relaxation at step {ctx.step} did not converge: "
+                    f"tlsph: {cfg.integrator} solve at step {ctx.step} did not converge: "
                     f"residual {info['residual']:.3g} > relax_tol {cfg.relax_tol:g} after "
                     f"{info['steps']} steps (raise [tlsph] relax_max_steps, or check for "
                     "an unsupported body under a net load)")

@@ -125,20 +125,26 @@ TLSPH = Section("tlsph", (
     Param("blocks", STRINGS, None, default_doc="every block of kind `\"solid\"`",
           doc="blocks forming the body; touching blocks are bonded (one body, several "
               "materials).  Materials need `E`, `nu` (and `alpha` for thermal strain)"),
-    Param("integrator", str, "verlet", choices=("verlet", "trapezoid", "relax"),
+    Param("integrator", str, "verlet",
+          choices=("verlet", "trapezoid", "implicit", "relax", "newton"),
           doc="verlet: explicit velocity Verlet at `cfl` x 2/omega_max; trapezoid: implicit "
               "trapezoidal rule by fixed-point iteration (Park 2019 sec. 2.5.5), which "
-              "contracts only below the explicit limit; relax: quasi-static, every step "
-              "relaxed to equilibrium under that step's loads (dynamic relaxation)"),
+              "contracts only below the explicit limit; implicit: the same trapezoidal rule "
+              "solved by Newton-Krylov, at any step (default `dt`: 10 x the explicit "
+              "limit); relax: quasi-static, every step relaxed to equilibrium under that "
+              "step's loads (dynamic relaxation); newton: quasi-static as relax, solved by "
+              "Newton-Krylov (same `relax_tol`)"),
     Param("cfl", float, 0.8, gt=0.0, lt=1.0,
           doc="fraction of the explicit limit 2/omega_max (power iteration on the "
               "particle stiffness at the start) used as the verlet/trapezoid step"),
     Param("dt", float, None, unit="s", positive=True, quantity="time step",
-          default_doc="trapezoid: `cfl` x explicit limit; relax: no limit (one step, or "
-                      "the other modules' steps)",
-          doc="fixed step of the trapezoid / relax integrators"),
+          default_doc="trapezoid: `cfl` x explicit limit; implicit: 10 x the explicit "
+                      "limit; relax, newton: no limit (one step, or the other modules' "
+                      "steps)",
+          doc="fixed step of the trapezoid / implicit / relax / newton integrators"),
     Param("tol", float, 1e-9, positive=True,
-          doc="trapezoid: fixed-point tolerance on max(|dx|, dt |dv|) / dx"),
+          doc="trapezoid: fixed-point tolerance on max(|dx|, dt |dv|) / dx; implicit: "
+              "bound on the position error of the Newton-Krylov solve, in dx"),
     Param("max_iter", int, 200, ge=1, doc="trapezoid: fixed-point iterations per step"),
     Param("on_failure", str, "stop", choices=("stop", "substep"),
           doc="trapezoid step that does not converge: stop the run with the iteration "
@@ -147,7 +153,7 @@ TLSPH = Section("tlsph", (
     Param("damping", float, 0.0, ge=0.0, unit="1/s", quantity="damping rate",
           doc="viscous damping rate c of a -= c v (verlet and trapezoid); 0: undamped"),
     Param("relax_tol", float, 1e-6, positive=True,
-          doc="relax: residual force / load at which the relaxation stops"),
+          doc="relax, newton: residual force / load at which the solve stops"),
     Param("relax_max_steps", int, 200000, ge=1,
           doc="relax: pseudo-time steps per relaxation before the run stops"),
     Param("hourglass", float, 10.0, ge=0.0,
