@@ -235,3 +235,24 @@ def test_module_newton_and_implicit_integrators(tmp_path):
     u_static = np.abs(out["newton"][1]).max()
     u = body_arrays(sim)[1]
     assert np.isfinite(u).all() and 0.0 < np.abs(u).max() <= 2.0 * u_static
+
+
+def test_amg_and_direct_preconditioners_give_the_same_static_state():
+    """The 3D pair-stiffness preconditioner by sparse LU and by the AMG V-cycle (used above
+    ``direct_max`` unknowns): the same equilibrium to the solve's tolerance."""
+    from sphfem.solid.backend import TLSPHSubstrate
+
+    us = []
+    for direct_max in (10**6, 0):
+        s = TLSPHSubstrate((0.0, 0.0, 0.0), (8 * DX, 8 * DX, 4 * DX), DX, E, NU, 8e-6,
+                           rho=RHO, clamps=["bottom"], tol=1e-8)
+        b = s.body
+        b.__dict__["_nk_precond"] = {(0.0, b.fixed.tobytes()):
+                                     implicit.Preconditioner(b, 0.0, direct_max=direct_max)}
+        s._set_loads(lambda Y: 40.0 * np.exp(-((Y[0] - 4 * DX) ** 2) / (3 * DX) ** 2), None,
+                     None, None)
+        info = implicit.static_solve(b, tol=1e-8)
+        assert info["converged"]
+        assert info["preconditioner"] == ("splu" if direct_max else "amg")
+        us.append(b.u.copy())
+    assert np.abs(us[0] - us[1]).max() <= 1e-6 * np.abs(us[0]).max()
