@@ -149,6 +149,8 @@ def scene_at(speed: float, per_diameter: int, t_end_tc: float, *,
     d["time"]["t_end"] = f"{t_end_tc} tc"
     d["output"]["every"] = f"{t_end_tc / 4} tc"
     d["scene"]["name"] = f"droplet_impact_axi_V{speed:g}_D{per_diameter}"
+    d["scene"]["description"] = (f"the packaged axisymmetric droplet scene at {speed:g} m/s, "
+                                 f"D/dx = {per_diameter}, to {t_end_tc:g} tc")
     # the SPH wall one kernel support deep at every level (the packaged scene's 3 dx): deeper
     # rows have no fluid neighbour (the substrate's heat and stress are the FEM's), and a
     # fixed depth would carry 8 rows at D/dx 64, 24 at 128 (60 % of the particles there)
