@@ -298,6 +298,11 @@ def run_one(speed: float, per_diameter: int, t_end_tc: float, out: Path | None =
     return figures(summary, speed, 2.0 * drop["radius"]), t.s
 
 
+def _one_decimal(v) -> str:
+    """``v`` with one decimal, "-" when missing (a level read from an older JSON)."""
+    return "-" if v is None else f"{v:.1f}"
+
+
 def speed_criteria(speed: float, levels, figs: list[dict], quick: bool = False):
     """The criteria (name -> :class:`Criterion`) and notes of one impact speed from the
     figures (:func:`figures`) of its ``levels`` (particles across the droplet, coarse to
@@ -342,9 +347,9 @@ def speed_criteria(speed: float, levels, figs: list[dict], quick: bool = False):
             f"{fin['Re']:.0f}), relative to the band's edge",
             max(lo / fin["spread"] - 1.0, fin["spread"] / hi - 1.0, 0.0), TOL_CORRELATIONS)
     notes.append(f"{tag}: lamella at maximum spreading, particles across (2 D / (3 beta^2 "
-                 "dx)): " + ", ".join(f"{f['lamella_particles']:.1f}" for f in figs)
+                 "dx)): " + ", ".join(_one_decimal(f.get('lamella_particles')) for f in figs)
                  + "; residual film 0.79 D Re^-0.4 (Roisman 2009), particles across: "
-                 + ", ".join(f"{f['film_particles']:.1f}" for f in figs)
+                 + ", ".join(_one_decimal(f.get('film_particles')) for f in figs)
                  + "; contact diameter / Wagner over "
                  f"[{T_WAGNER[0]}, {T_WAGNER[1]}] t_c: "
                  + ", ".join(f"{f['wagner_ratio']:.3f}" for f in figs)
