@@ -39,9 +39,10 @@ def file_mode() -> int:
     return 0o666 & ~mask
 
 
-def atomic_write_bytes(path, data: bytes) -> None:
-    """Write ``data`` to ``path`` via a temporary file and an atomic rename (mode
-    :func:`file_mode`, as a plain ``open()`` would make it)."""
+def atomic_write_bytes(path, data) -> None:
+    """Write ``data`` (bytes, or a sequence of bytes pieces written one after the other)
+    to ``path`` via a temporary file and an atomic rename (mode :func:`file_mode`, as a
+    plain ``open()`` would make it)."""
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
     fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", dir=path.parent)
@@ -49,7 +50,9 @@ def atomic_write_bytes(path, data: bytes) -> None:
         if hasattr(os, "fchmod"):
             os.fchmod(fd, file_mode())
         with os.fdopen(fd, "wb") as fh:
-            fh.write(data)
+            for piece in ((data,) if isinstance(data, (bytes, bytearray, memoryview))
+                          else data):
+                fh.write(piece)
         os.replace(tmp, path)
     except BaseException:
         if os.path.exists(tmp):

@@ -3,13 +3,12 @@
 from __future__ import annotations
 
 import base64
-import os
 import sys
 import zlib
 
 import numpy as np
 
-from sphfem.output import VTUSeries
+from sphfem.output import VTUSeries, atomic_write_bytes
 
 #: meshio's block size of a compressed VTU data array [bytes]
 _BLOCK = 32768
@@ -216,18 +215,8 @@ class FEMSeries(VTUSeries):
     def _write_text(self, t: float, text: str, binary=()):
         """``text`` (and the ``binary`` pieces after it) into the next file of the series
         (temporary name, renamed), then the .pvd (as :meth:`VTUSeries.write_mesh`)."""
-        self.folder.mkdir(parents=True, exist_ok=True)
         fname = f"{self.name}_{len(self.entries):05d}.vtu"
-        tmp = self.folder / f".{fname}.tmp.vtu"
-        try:
-            with open(tmp, "wb") as fh:
-                fh.write(text.encode("ascii"))
-                for b in binary:
-                    fh.write(b)
-            os.replace(tmp, self.folder / fname)
-        finally:
-            if tmp.exists():
-                tmp.unlink()
+        atomic_write_bytes(self.folder / fname, [text.encode("ascii"), *binary])
         self.entries.append((float(t), fname))
         self._write_pvd()
         return self.folder / fname
