@@ -425,11 +425,15 @@ class AxisymmetricFluidModule(PhysicsModule):
             self._next_spread = ctx.t + dt + self.spread_every
 
     def _depth(self, s) -> float:
-        """How far the lowest fluid ring lies below the floor's top [dx] (<= 0: above; the
-        floor: the wall particles whose exposed face is a top face)."""
+        """How far the lowest fluid ring over the floor lies below the floor's top [dx]
+        (<= 0: above; the floor: the wall particles whose exposed face is a top face).  A
+        ring beyond the floor's outer radius has flown past its edge, not through it: it
+        does not count (it is reported by the domain-box check)."""
         if self.wall_top is None:
             return 0.0
-        return float((self.wall_top - s.x[self.fl, 1].min()) / self.dx)
+        x = s.x[self.fl]
+        z = x[x[:, 0] <= self._wall_r_max, 1]
+        return float((self.wall_top - z.min()) / self.dx) if z.size else -math.inf
 
     def _correction_forces(self, ctx, v_n, dt: float) -> None:
         """The no-penetration correction's normal momentum, as ring forces on the nearest

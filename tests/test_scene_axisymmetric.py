@@ -457,3 +457,21 @@ def test_residual_film_resolution_reported(tmp_path, caplog):
     with caplog.at_level(logging.WARNING, logger="sphfem.axisymmetric_scene"):
         f = run(data, tmp_path / "viscous")[1]["diagnostics"]["fluid"]["residual_film"]
     assert f["particles_across"] > 3.0 and "residual film" not in caplog.text
+
+
+def test_depth_counts_rings_over_the_floor_only():
+    """The wall-breach depth counts fluid rings over the floor only: a spray ring that flew
+    past the floor's outer edge and fell below its top has not gone through the wall (a
+    D/dx 128 impact was stopped by one 623 dx below the top, 0.6 mm out)."""
+    from sphfem.simulation import Simulation
+
+    sim = Simulation(parse_scene(droplet_scene()))
+    sim._init_modules()
+    fluid = next(m for m in sim.modules if m.name == "fluid")
+    s = fluid.solver
+    rows = np.flatnonzero(s.kind == FLUID)
+    assert fluid._depth(s) < 0.0                  # the droplet starts above the wall
+    s.x[rows[0]] = [fluid._wall_r_max + 2.0 * DX, -100.0 * DX]
+    assert fluid._depth(s) < 0.0                  # past the edge: not counted
+    s.x[rows[0]] = [0.5 * fluid._wall_r_max, fluid.wall_top - 1.5 * DX]
+    assert fluid._depth(s) == pytest.approx(1.5)  # over the floor: counted
