@@ -226,14 +226,14 @@ class AxisymmetricFluidModule(PhysicsModule):
     #: threw first-column rings out at D/dx = 32), wall pressure clipped at 0 (no suction
     #: of the contact line into the wall), surface rings held at rho >= rho0.  With
     #: ``[fluid] shifting`` the impact at 50 m/s, D/dx = 32 runs calm to 4 tc.
-    #: Fragments (lambda_min < renorm_lambda_min: isolated rings, one-ring sheets) keep
-    #: their density (``fragment_incompressible``): a free ring has no neighbour to show
-    #: the meridional spreading that balances its hoop term, so -rho v_r / r alone gave it
+    #: Fragments (lambda_min < renorm_lambda_min: isolated rings, one-ring sheets) carry no
+    #: hoop term in their continuity (``fragment_hoop=False``): a free ring has no
+    #: neighbour to show the meridional spreading that balances -rho v_r / r, so with it
     #: rho r = const.  In the 10 m/s impact at D/dx 181 a spray ring bouncing near the axis
     #: reached 2.4 rho0 (p ~ 1e3 rho V^2), fell onto the lamella at ~1.9 t_c and blew its
     #: centre open (the impact point dried at 2.3 t_c; rings of 7e10 Pa by 2.4 t_c)
     fluid_options = {"adaptive_h": False, "wall_tension": False,
-                     "free_surface_no_tension": True, "fragment_incompressible": True}
+                     "free_surface_no_tension": True, "fragment_hoop": False}
     #: Verlet skin of the fluid's (and the heat's) neighbour list, as a fraction of R: the
     #: list reaches R (1 + SKIN) and is rebuilt only when a ring has moved R SKIN / 2.
     #: Every pair kernel skips pairs beyond its support and list rows are sorted by index,

@@ -378,29 +378,38 @@ def test_fragment_divergence_not_amplified(lam_min):
         assert np.abs(f.drho).max() > 3 * np.abs(expect).max()
 
 
-def test_fragment_incompressible():
-    """fragment_incompressible: a ring with no neighbour (lambda_min = 0) flying out at v_r = u
-    keeps its density (Drho/Dt = 0: a free fluid element with ambient pressure on every side
-    thins instead; measured 0 exactly), where the default gives the hoop rate -rho u / r
+def test_fragment_hoop():
+    """fragment_hoop=False: a ring with no neighbour (lambda_min = 0) flying out at v_r = u
+    keeps its density (Drho/Dt = 0 exactly), where the default gives the hoop rate -rho u / r
     exactly (the isolated rim rings of the D/dx = 32-64 impacts fell to rho = 0.01-0.03 rho0 by
-    it and hit the EOS floor).  In the bulk (lambda_min ~ 1) nothing changes: Drho/Dt of
-    v = (r^3, 0) identical to round-off."""
+    it; a ring flying in gains density as 1 / r).  Two fragment rings closing on each other
+    still compress (the meridional divergence is kept): Drho/Dt > 0 on both, and differs
+    from the default's by its hoop term only.  In the bulk (lambda_min ~ 1) nothing changes:
+    Drho/Dt of v = (r^3, 0) identical to the bit."""
     x1, r, u = np.array([[1e-3, 0.0]]), 1e-3, 2.0
     pa = FluidParams(rho0=1000.0, c0=100.0, mu=0.0, delta=0.1, alpha=0.0)
 
-    def one(fi):
-        return AxisymmetricFluid(x1, [[u, 0.0]], [1000.0], [FLUID],
-                                 ring_mass(x1[:, 0], 1000.0, 1e-10), 0.0, 3e-5, pa,
-                                 fragment_incompressible=fi).drho[0]
+    def one(hoop, x=x1, v=((u, 0.0),)):
+        return AxisymmetricFluid(x, list(v), [1000.0] * len(x), [FLUID] * len(x),
+                                 ring_mass(x[:, 0], 1000.0, 1e-10), 0.0, 3e-5, pa,
+                                 fragment_hoop=hoop)
 
-    assert one(True) == 0.0
-    assert one(False) == pytest.approx(-1000.0 * u / r, rel=1e-12)
+    assert one(False).drho[0] == 0.0
+    assert one(True).drho[0] == pytest.approx(-1000.0 * u / r, rel=1e-12)
+    pair = np.array([[1e-3, 0.0], [1e-3 + 1e-5, 0.0]])
+    closing = ((u, 0.0), (-u, 0.0))
+    f, d = one(False, pair, closing), one(True, pair, closing)
+    assert np.all(f.drho > 0.0)
+    # the difference is the default's hoop term rho <v_r / r>, a Shepard average of the
+    # pair's v_r / r = u / r_0 and -u / r_1
+    q = (f.drho - d.drho) / 1000.0
+    assert np.all((q > -u / pair[1, 0]) & (q < u / pair[0, 0]))
     x, dx, R, inner, _ = block(30)
     v = np.column_stack([x[:, 0] ** 3, 0 * x[:, 1]])
     d = [AxisymmetricFluid(x, v, np.ones(len(x)), np.full(len(x), FLUID),
                            ring_mass(x[:, 0], 1.0, dx * dx), dx * dx, R,
                            FluidParams(rho0=1.0, c0=10.0, mu=0.0, delta=0.1),
-                           fragment_incompressible=fi).drho for fi in (False, True)]
+                           fragment_hoop=h).drho for h in (True, False)]
     assert np.array_equal(d[0][inner], d[1][inner])
 
 

@@ -113,7 +113,7 @@ def main():
     ap.add_argument("--h-mode", choices=("area", "mean-area"), default="area",
                     help="adaptive h from the ring's own area or the local mean area")
     ap.add_argument("--no-penetration-off", action="store_true")
-    ap.add_argument("--fragment-incompressible", action="store_true")
+    ap.add_argument("--no-fragment-hoop", action="store_true")
     ap.add_argument("--kw", action="append", default=[], metavar="KEY=VALUE",
                     help="more AxisymmetricFluid keywords (Python literals), repeatable")
     ap.add_argument("--out")
@@ -121,7 +121,7 @@ def main():
     extra = {k: ast.literal_eval(x) for k, x in (s.split("=", 1) for s in a.kw)}
     res = run(a.n, a.v, a.c0 or 10 * a.v, a.mu, a.tc, adaptive_h=False if a.fixed_h else a.h_mode,
               no_penetration=not a.no_penetration_off,
-              fragment_incompressible=a.fragment_incompressible, **extra)
+              fragment_hoop=not a.no_fragment_hoop, **extra)
     print(json.dumps({k: x for k, x in res.items() if k not in ("history", "columns")}))
     if a.out:
         with open(a.out, "w") as fh:

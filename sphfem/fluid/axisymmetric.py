@@ -307,7 +307,7 @@ def gradients(x, rho, vg, A, kind, offsets, indices, Rp, s2, kcode, Lz, cond_max
 
 @njit(cache=True, parallel=True)
 def forces(x, v, vg, vd, rho, p, A, mt, mu, kind, grad_rho, dvdr, offsets, indices, Rp, s2,
-           kcode, Lz, gravity, eps, delta_c, alpha_c, hoop, Bm, qh, frag_incompressible, fw,
+           kcode, Lz, gravity, eps, delta_c, alpha_c, hoop, Bm, qh, frag_no_hoop, fw,
            wall_art, acc, drho, gradv, prr, count, pair_j, pair_d, pair_k):
     """Accelerations and density rates of the real FLUID rows (module docstring); other
     rows are zeroed.  ``hoop``: 1.0, or 0.0 to drop the hoop terms (planar mode).  Arrays
@@ -393,8 +393,8 @@ def forces(x, v, vg, vd, rho, p, A, mt, mu, kind, grad_rho, dvdr, offsets, indic
         gradv[i, 3] = -(G10 * Bm[i, 1] + G11 * Bm[i, 2])
         acc[i, 0] = a0 + hoop * nu * dvdr[i, 0] + gravity[0]
         acc[i, 1] = a1 + hoop * nu * dvdr[i, 1] / rr + gravity[1]
-        if Bm[i, 3] != 0.0 and frag_incompressible:  # a fragment: free, p = 0 around
-            drho[i] = 2.0 * diff
+        if Bm[i, 3] != 0.0 and frag_no_hoop:  # a fragment: no hoop term (fragment_hoop)
+            drho[i] = ri * cont + 2.0 * diff
         else:
             drho[i] = ri * cont - hoop * ri * qh[i] + 2.0 * diff
 
@@ -663,11 +663,16 @@ class AxisymmetricFluid:
     ``renorm_lambda_min``); with adaptive h at D/dx = 16 it makes the lamella noisier
     (p_min -7 vs -2 rho V^2 at 0.4 t_c) and a ring is thrown out, so it is not the default.
     ``renorm_lambda_min``: see the module docstring (0: the old behaviour).
-    ``fragment_incompressible`` (opt-in): on fragments (lambda_min < ``renorm_lambda_min``)
-    Drho/Dt is the delta term alone: a free fluid element with ambient pressure around it
-    thins as it stretches instead of losing density (without it the one-ring-thick rim
-    sheet of the D/dx = 64 impact fell to 0.01 rho0 by the hoop term -rho v_r / r, with it
-    rho_min stayed 0.988 rho0 to 0.7 t_c).
+    ``fragment_hoop=False``: on fragments (lambda_min < ``renorm_lambda_min``: isolated
+    rings, one-ring sheets, small clusters) the continuity drops its hoop term and keeps the
+    meridional divergence and the delta term.  A free ring cannot show the meridional
+    spreading that balances -rho v_r / r in a real fluid element, so with the hoop term it
+    follows rho r = const: flying out it fell to 0.01-0.03 rho0 (the one-ring rim sheets of
+    the D/dx = 32-64 impacts), flying in it reached 2-3 rho0 (a spray ring bouncing next to
+    the axis at D/dx = 181, 10 m/s, then fell onto the lamella at ~1.9 t_c with ~1e3 rho V^2
+    and blew its centre open).  Colliding fragments still compress and push apart: an
+    earlier variant (Drho/Dt = the delta term alone on fragments) had a spray ring at
+    1600 m/s (160 V) by 1 t_c in that run, which then set the acoustic step (8x smaller).
 
     ``adaptive_h="mean-area"``: R_i = R sqrt(<A>_i / a_ref) from the number-weighted mean
     area of the fluid around the ring (:func:`mean_area`, of the previous evaluation) in
@@ -708,7 +713,7 @@ class AxisymmetricFluid:
                  wall_z: float | None = None, adaptive_h: bool = False, wall_normals=None,
                  smooth_hoop: bool = True, surface_tension: float = 0.0,
                  no_penetration: bool = False, renorm_lambda_min: float = 0.2,
-                 fragment_incompressible: bool = False, shifting: float = 0.0,
+                 fragment_hoop: bool = True, shifting: float = 0.0,
                  wall_tension: bool = True, free_surface_no_tension: bool = False,
                  shift_surface: bool = True, skin: float = 0.0,
                  wall_friction: str = "sph", film_tension: bool = False):
@@ -759,7 +764,7 @@ class AxisymmetricFluid:
         #: renormalisation only where the moment matrix' smallest eigenvalue reaches this
         self.renorm_lambda_min = float(renorm_lambda_min)
         #: Drho/Dt = 0 (plus the delta term) on fragments (lambda_min < renorm_lambda_min)
-        self.fragment_incompressible = bool(fragment_incompressible)
+        self.fragment_hoop = bool(fragment_hoop)
         if not shifting >= 0.0:
             raise ValueError(f"shifting must be >= 0 (the coefficient A), got {shifting!r}")
         #: False: the walls' extrapolated pressure is clipped at 0 (no suction)
@@ -965,7 +970,7 @@ class AxisymmetricFluid:
         forces(x, v, vg, vd, rho, p, A, mt, mu, kind, gr, dvdr, nl.offsets, nl.indices, Rp,
                self.s2, self.kcode, self.Lz, self.gravity, pa.eps_visc, pa.delta * pa.c0,
                pa.alpha * pa.c0,
-               0.0 if self.planar else 1.0, Bm, qh, self.fragment_incompressible, fw,
+               0.0 if self.planar else 1.0, Bm, qh, not self.fragment_hoop, fw,
                wall_art, acc, drho, gradv, prr, *pc[1:])
         if self.wall_friction == "layer":
             self._layer_inputs(x, kind, nl, Rp, src, mtype, gradv, qh)
