@@ -34,6 +34,16 @@ Passes (each a numba kernel; the planar ones are those of the planar CSF):
    with the support radius R, (a, b) = :data:`AXIS_BAND`: the pointwise ratio away from the
    axis, the meridian curvature at the axis.  kappa_h - kappa_m is even and vanishes at
    r = 0, so the blend errs by O(r^2) there, i.e. O(R^2) (zero on a sphere);
+   Curvature at the axis (``axis_curvature``, opt-in): next to the axis the colour
+   gradient itself is distorted: a ring at r and its mirror are 2 r apart and the areas
+   M / (2 pi r rho) vary as 1 / r, so jitter of a flowing lattice tilts the normals there
+   (n_r = -0.3 to -0.6 on a flat film) and the curvature of a flat surface reads 2-3e6 1/m
+   at D/dx 90 (examples/axisymmetric/csf_axis_noise.py).  With the option kappa_i in the
+   band is blended (the same smoothstep) into the mean kappa of the valid rows at the
+   band's outer edge, r in [b R, b R + R], within |dz| < R (kappa is even and smooth in r,
+   so this errs by O(R^2) like the hoop blend): on the jittered flat film the top rings'
+   spurious a_r within 2 dx of the axis fall from 3-5e6 to 0.5-1e5 m/s^2, the level of
+   the rest of the surface; on the sphere nothing changes (test);
 4. band curvature (Shepard extension) and force a_i = 2 sigma kbar_i g_i / rho_i
    (:func:`~sphfem.fluid.surface_tension_csf.csf_force`), with kappa copied to the mirrors.
 
@@ -552,6 +562,33 @@ def capillary_dt(rho, h, sigma) -> float:
     return 0.25 * math.sqrt(rho * h**3 / (2.0 * math.pi * sigma))
 
 
+def axis_curvature_extension(x, kappa, omega, kind, n, r_in, r_out, R):
+    """``axis_curvature``: the curvature of the real fluid rows with a valid normal inside
+    the axis band taken from the band's outer edge.  kappa is even and smooth in r, so
+    kappa(r) = kappa(r_e) + O(r_e^2); next to the axis the pointwise value carries the
+    colour gradient's distortion there (rings and their mirrors 2 r apart;
+    examples/axisymmetric/csf_axis_noise.py).  kappa_i <- s_i kappa_i + (1 - s_i) kappa_e,i,
+    s_i the smoothstep of (r_i - ``r_in``) / (``r_out`` - ``r_in``), kappa_e,i the mean of
+    kappa_j weighted by omega_j f(|z_j - z_i| / R) (f the Wendland C2 shape) over the valid
+    rows j with ``r_out`` <= r_j < ``r_out`` + R and |z_j - z_i| < R (unchanged where there
+    is none).  In place."""
+    valid = (np.asarray(kind[:n]) == FLUID) & (omega[:n] > 0.0)
+    r = np.abs(x[:n, 0])
+    rows = np.flatnonzero(valid & (r < r_out))
+    edge = np.flatnonzero(valid & (r >= r_out) & (r < r_out + R))
+    if rows.size == 0 or edge.size == 0:
+        return
+    dz = np.abs(x[edge, 1][None, :] - x[rows, 1][:, None]) / R
+    q = np.minimum(dz, 1.0)
+    w = omega[edge][None, :] * (1.0 - q) ** 4 * (1.0 + 4.0 * q)  # Wendland C2 shape
+    den = w.sum(axis=1)
+    ok = den > 0.0
+    ke = np.where(ok, (w * kappa[edge][None, :]).sum(axis=1) / np.where(ok, den, 1.0), 0.0)
+    a = np.clip((r[rows] - r_in) / (r_out - r_in), 0.0, 1.0)
+    s = a * a * (3.0 - 2.0 * a)
+    kappa[rows] = np.where(ok, s * kappa[rows] + (1.0 - s) * ke, kappa[rows])
+
+
 class AxisymmetricCSF:
     """CSF surface tension ``sigma`` [N/m] for the augmented (real + mirror) particle set of
     :class:`~sphfem.fluid.axisymmetric.AxisymmetricFluid` (module docstring).
@@ -563,13 +600,17 @@ class AxisymmetricCSF:
     """
 
     def __init__(self, sigma: float, kernel_code: int = kernels.WENDLAND_C2,
-                 axis_band=AXIS_BAND, hoop: bool = True, film: bool = False):
+                 axis_band=AXIS_BAND, hoop: bool = True, film: bool = False,
+                 axis_curvature: bool = False):
         if not sigma >= 0.0:
             raise ValueError(f"surface tension sigma must be >= 0, got {sigma}")
         self.sigma = float(sigma)
         self.kernel_code = int(kernel_code)
         self.axis_band = tuple(float(a) for a in axis_band)
         self.hoop = bool(hoop)
+        #: the curvature of the axis band from the band's outer edge (module docstring,
+        #: "Curvature at the axis"; opt-in)
+        self.axis_curvature = bool(axis_curvature)
         #: the film model (module docstring, "Thin films"): off by default
         self.film = bool(film)
         self.state = None
@@ -602,6 +643,8 @@ class AxisymmetricCSF:
             hoop_curvature(np.abs(x[:, 0]), st.g, st.omega, self.kappa_m, a * R, b * R, kh)
         self.kappa_h = kh
         st.kappa += kh
+        if self.axis_curvature and self.hoop:
+            axis_curvature_extension(x, st.kappa, st.omega, kind, n, a * R, b * R, R)
         mirror_scalar(n, src, st.kappa)
         work = np.zeros((m, 2))
         csf_force(x, A, rho, kc, offsets, indices, R, ks, kcode, period, self.sigma,
