@@ -232,8 +232,14 @@ class AxisymmetricFluidModule(PhysicsModule):
     #: rho r = const.  In the 10 m/s impact at D/dx 181 a spray ring bouncing near the axis
     #: reached 2.4 rho0 (p ~ 1e3 rho V^2), fell onto the lamella at ~1.9 t_c and blew its
     #: centre open (the impact point dried at 2.3 t_c; rings of 7e10 Pa by 2.4 t_c)
+    #: The CSF's axis band takes its curvature from the band's edge (``csf_axis_curvature``;
+    #: examples/axisymmetric/csf_axis_noise.py): without it the distorted colour gradient
+    #: next to the axis pulled the lamella's centre inwards from ~2.1 t_c and opened a dry
+    #: hole at the impact point by 2.7 t_c (10 m/s, D/dx 90; also at 128 and 181); with it
+    #: the centre stayed wetted past 3.3 t_c at D/dx 90
     fluid_options = {"adaptive_h": False, "wall_tension": False,
-                     "free_surface_no_tension": True, "fragment_hoop": False}
+                     "free_surface_no_tension": True, "fragment_hoop": False,
+                     "csf_axis_curvature": True}
     #: Verlet skin of the fluid's (and the heat's) neighbour list, as a fraction of R: the
     #: list reaches R (1 + SKIN) and is rebuilt only when a ring has moved R SKIN / 2.
     #: Every pair kernel skips pairs beyond its support and list rows are sorted by index,
