@@ -235,8 +235,8 @@ class AxisymmetricFluidModule(PhysicsModule):
     #: The CSF's axis band takes its curvature from the band's edge (``csf_axis_curvature``;
     #: examples/axisymmetric/csf_axis_noise.py): without it the distorted colour gradient
     #: next to the axis pulled the lamella's centre inwards from ~2.1 t_c and opened a dry
-    #: hole at the impact point by 2.7 t_c (10 m/s, D/dx 90; also at 128 and 181); with it
-    #: the centre stayed wetted past 3.3 t_c at D/dx 90
+    #: hole at the impact point by 2.7 t_c (10 m/s, D/dx 90; 3.2 t_c at 128); with it the
+    #: impact point stayed wetted to 4 t_c at D/dx 90 (a gap opened next to it at 3.4 t_c)
     fluid_options = {"adaptive_h": False, "wall_tension": False,
                      "free_surface_no_tension": True, "fragment_hoop": False,
                      "csf_axis_curvature": True}
