@@ -231,7 +231,7 @@ class AxisymmetricFluidModule(PhysicsModule):
     #: neighbour to show the meridional spreading that balances -rho v_r / r, so with it
     #: rho r = const.  In the 10 m/s impact at D/dx 181 a spray ring bouncing near the axis
     #: reached 2.4 rho0 (p ~ 1e3 rho V^2), fell onto the lamella at ~1.9 t_c and blew its
-    #: centre open (the impact point dried at 2.3 t_c; rings of 7e10 Pa by 2.4 t_c)
+    #: centre open (the impact point dried at 2.3 t_c; rings of 7e10 Pa by 2.4 t_c).
     #: The CSF's axis band takes its curvature from the band's edge (``csf_axis_curvature``;
     #: examples/axisymmetric/csf_axis_noise.py): without it the distorted colour gradient
     #: next to the axis pulled the lamella's centre inwards from ~2.1 t_c and opened a dry

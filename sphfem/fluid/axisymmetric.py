@@ -766,7 +766,7 @@ class AxisymmetricFluid:
         self.smooth_hoop = bool(smooth_hoop)
         #: renormalisation only where the moment matrix' smallest eigenvalue reaches this
         self.renorm_lambda_min = float(renorm_lambda_min)
-        #: Drho/Dt = 0 (plus the delta term) on fragments (lambda_min < renorm_lambda_min)
+        #: False: fragments (lambda_min < renorm_lambda_min) carry no hoop term in Drho/Dt
         self.fragment_hoop = bool(fragment_hoop)
         if not shifting >= 0.0:
             raise ValueError(f"shifting must be >= 0 (the coefficient A), got {shifting!r}")

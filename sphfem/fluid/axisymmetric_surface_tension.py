@@ -562,7 +562,7 @@ def capillary_dt(rho, h, sigma) -> float:
     return 0.25 * math.sqrt(rho * h**3 / (2.0 * math.pi * sigma))
 
 
-def axis_curvature_extension(x, kappa, omega, kind, n, r_in, r_out, R):
+def axis_curvature_extension(x, kappa, omega, kind, n, r_in, r_out, R, Lz=0.0):
     """``axis_curvature``: the curvature of the real fluid rows with a valid normal inside
     the axis band taken from the band's outer edge.  kappa is even and smooth in r, so
     kappa(r) = kappa(r_e) + O(r_e^2); next to the axis the pointwise value carries the
@@ -571,14 +571,17 @@ def axis_curvature_extension(x, kappa, omega, kind, n, r_in, r_out, R):
     s_i the smoothstep of (r_i - ``r_in``) / (``r_out`` - ``r_in``), kappa_e,i the mean of
     kappa_j weighted by omega_j f(|z_j - z_i| / R) (f the Wendland C2 shape) over the valid
     rows j with ``r_out`` <= r_j < ``r_out`` + R and |z_j - z_i| < R (unchanged where there
-    is none).  In place."""
+    is none; ``Lz`` > 0: z periodic with that period).  In place."""
     valid = (np.asarray(kind[:n]) == FLUID) & (omega[:n] > 0.0)
     r = np.abs(x[:n, 0])
     rows = np.flatnonzero(valid & (r < r_out))
     edge = np.flatnonzero(valid & (r >= r_out) & (r < r_out + R))
     if rows.size == 0 or edge.size == 0:
         return
-    dz = np.abs(x[edge, 1][None, :] - x[rows, 1][:, None]) / R
+    dz = np.abs(x[edge, 1][None, :] - x[rows, 1][:, None])
+    if Lz > 0.0:
+        dz = np.minimum(dz % Lz, Lz - dz % Lz)
+    dz = dz / R
     q = np.minimum(dz, 1.0)
     w = omega[edge][None, :] * (1.0 - q) ** 4 * (1.0 + 4.0 * q)  # Wendland C2 shape
     den = w.sum(axis=1)
@@ -644,7 +647,8 @@ class AxisymmetricCSF:
         self.kappa_h = kh
         st.kappa += kh
         if self.axis_curvature and self.hoop:
-            axis_curvature_extension(x, st.kappa, st.omega, kind, n, a * R, b * R, R)
+            axis_curvature_extension(x, st.kappa, st.omega, kind, n, a * R, b * R, R,
+                                     float(Lz))
         mirror_scalar(n, src, st.kappa)
         work = np.zeros((m, 2))
         csf_force(x, A, rho, kc, offsets, indices, R, ks, kcode, period, self.sigma,
