@@ -236,7 +236,9 @@ class AxisymmetricFluidModule(PhysicsModule):
     #: examples/axisymmetric/csf_axis_noise.py): without it the distorted colour gradient
     #: next to the axis pulled the lamella's centre inwards from ~2.1 t_c and opened a dry
     #: hole at the impact point by 2.7 t_c (10 m/s, D/dx 90; 3.2 t_c at 128); with it the
-    #: impact point stayed wetted to 4 t_c at D/dx 90 (a gap opened next to it at 3.4 t_c)
+    #: impact point stayed wetted to 4 t_c at D/dx 90 (a gap opened next to it at 3.4 t_c),
+    #: but at 128 it dried at 2.95 t_c: a partial fix (the interior rings next to the axis
+    #: keep a spurious pull)
     fluid_options = {"adaptive_h": False, "wall_tension": False,
                      "free_surface_no_tension": True, "fragment_hoop": False,
                      "csf_axis_curvature": True}
