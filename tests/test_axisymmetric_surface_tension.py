@@ -233,6 +233,33 @@ def test_axis_curvature_from_the_band_edge(nr):
     assert rms[True] < 1.1 * rms_rest, (rms, rms_rest)
 
 
+def test_axis_lambda_gate_drops_bulk_normals_in_the_band():
+    """axis_lambda_gate: rings of the axis band whose lambda_min reaches the gate lose their
+    normal (omega = 0); rings outside the band and those below the gate keep theirs."""
+    dx = 1.0 / 20
+    x, a = half_disc_arcs(1.0, dx)
+    n, R = len(x), 3 * dx
+    csf, st, _ = _csf(x, a, dx)
+    om0 = st.omega[:n].copy()
+    lam = np.where(np.linalg.norm(x, axis=1) > 1.0 - dx, 0.5, 0.9)  # surface 0.5, bulk 0.9
+    lam[(x[:, 0] < 0.6 * R)] = 0.95  # pretend the whole band's first column is bulk
+    xm, src = axis_mirrors(x, R)
+    xa = np.vstack([x, xm])
+    kind = np.r_[np.full(n, FLUID), np.full(len(src), MIRROR_FLUID)].astype(np.int8)
+    nl = build_neighbor_list(xa, R, xa.min(0) - R, xa.max(0) + R, np.zeros(2), kind=kind,
+                             keep=KEEP)
+    gated = AxisymmetricCSF(1.0)
+    gated.axis_lambda_gate = 0.8
+    st = gated.accumulate(xa, np.r_[a, a[src]], np.ones(len(xa)), kind, nl.offsets,
+                          nl.indices, n, src.astype(np.int64), np.zeros(len(src), np.int8), R,
+                          0.0, np.zeros((n, 2)), lam=lam)
+    band = x[:, 0] < gated.axis_band[1] * R
+    assert np.all(st.omega[:n][band & (lam >= 0.8)] == 0.0)
+    np.testing.assert_array_equal(st.omega[:n][~band], om0[~band])
+    np.testing.assert_array_equal(st.omega[:n][band & (lam < 0.8)], om0[band & (lam < 0.8)])
+    assert (om0[band & (lam >= 0.8)] > 0).any()  # the gate removed some valid normals
+
+
 # ----------------------------------------------------------------- the hooked-up fluid
 
 

@@ -979,7 +979,8 @@ class AxisymmetricFluid:
             self._layer_inputs(x, kind, nl, Rp, src, mtype, gradv, qh)
         if self.csf is not None:  # CSF over the fluid's widest support (adaptive_h)
             self.csf.accumulate(x, A, rho, kind, nl.offsets, nl.indices, n, src, mtype,
-                                float(Rp[:n][self.fluid].max()), self.Lz, acc)
+                                float(Rp[:n][self.fluid].max()), self.Lz, acc,
+                                lam=Bm[:n, 4])
         self.acc[:] = acc[:n]
         self.drho[:] = drho[:n]
         self.p[:] = p[:n]

@@ -43,7 +43,13 @@ Passes (each a numba kernel; the planar ones are those of the planar CSF):
    band's outer edge, r in [b R, b R + R], within |dz| < R (kappa is even and smooth in r,
    so this errs by O(R^2) like the hoop blend): on the jittered flat film the top rings'
    spurious a_r within 2 dx of the axis fall from 3-5e6 to 0.5-1e5 m/s^2, the level of
-   the rest of the surface; on the sphere nothing changes (test);
+   the rest of the surface; on the sphere nothing changes (test).  The interior rings of
+   the band keep a spurious valid normal (|g| R up to 0.55 with a full support, the
+   fluid's lambda_min 0.82-0.98, against 0.40-0.77 on the true surface there):
+   ``axis_lambda_gate`` (experimental, attribute, None = off) removes the normals of the
+   band's rings with lambda_min at or above it; with 0.8 and ``axis_curvature`` the film's
+   spurious accelerations next to the axis fall to <= 1.1e5 m/s^2 everywhere (interior
+   -5e3 within one spacing, from -2.6e6);
 4. band curvature (Shepard extension) and force a_i = 2 sigma kbar_i g_i / rho_i
    (:func:`~sphfem.fluid.surface_tension_csf.csf_force`), with kappa copied to the mirrors.
 
@@ -614,6 +620,10 @@ class AxisymmetricCSF:
         #: the curvature of the axis band from the band's outer edge (module docstring,
         #: "Curvature at the axis"; opt-in)
         self.axis_curvature = bool(axis_curvature)
+        #: rings in the axis band whose moment matrix' smallest eigenvalue (the fluid's
+        #: lambda_min, passed to :meth:`accumulate`) reaches this get no normal (None: off;
+        #: experimental, module docstring "Curvature at the axis")
+        self.axis_lambda_gate = None
         #: the film model (module docstring, "Thin films"): off by default
         self.film = bool(film)
         self.state = None
@@ -623,7 +633,8 @@ class AxisymmetricCSF:
         self.film_phi = self.film_touch = np.zeros(0)
         self.film_stress = self.film_acc = np.zeros((0, 2))
 
-    def accumulate(self, x, A, rho, kind, offsets, indices, n, src, mtype, R, Lz, acc):
+    def accumulate(self, x, A, rho, kind, offsets, indices, n, src, mtype, R, Lz, acc,
+                   lam=None):
         """acc[:n] += CSF acceleration of the real rows.  ``x``, ``A``, ``rho``, ``kind``:
         the augmented set (rows n + q are the mirrors of ``src[q]`` of type ``mtype[q]``,
         fields already filled), its neighbour list ``offsets`` / ``indices`` (radius >= R),
@@ -636,6 +647,11 @@ class AxisymmetricCSF:
         kcode = self.kernel_code
         csf_normals(x, A, kc, offsets, indices, R, ks, kcode, period, NORMAL_LO, NORMAL_HI,
                     st.g, st.omega)
+        if self.axis_lambda_gate is not None and lam is not None and self.hoop:
+            # the axis band's rings with a full support are not surface (module docstring)
+            bulk = (np.abs(x[:n, 0]) < self.axis_band[1] * R) & (
+                np.asarray(lam, float)[:n] >= self.axis_lambda_gate)
+            st.omega[:n][bulk] = 0.0
         mirror_normals(n, src, mtype, st.g, st.omega)
         csf_curvature(x, A, kc, offsets, indices, R, ks, kcode, period, TANGENT_MIN, st.g,
                       st.omega, st.kappa)
