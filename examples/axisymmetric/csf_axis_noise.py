@@ -25,9 +25,9 @@ surface; the interior ring within one spacing keeps -2.6e6 (its distorted colour
 still passes as a surface normal; its lambda_min is 0.82-0.98, the true surface's there
 0.40-0.77): adding the experimental ``axis_lambda_gate = 0.8`` (no normal for the band's
 rings with lambda_min >= 0.8) brings it to -5e3 and every band to <= 1.1e5 m/s^2
-(measured by setting the attribute in ``film_state``).  An odd fit of the radial normal or colour gradient
-within the band (tried, not kept) cut the interior accelerations 30-90x but left the top
-rings' curvature at ~3e6 1/m.
+(measured by setting the attribute in ``film_state``).  An odd fit of the radial normal
+or colour gradient within the band (tried, not kept) cut the interior accelerations
+30-90x but left the top rings' curvature at ~3e6 1/m.
 """
 
 from __future__ import annotations
