@@ -301,7 +301,8 @@ class AxisymmetricFluidModule(PhysicsModule):
             wall_normals=nrm, smooth_hoop=True, no_penetration=self.no_penetration,
             surface_tension=self.sigma_st,
             shifting=(self.params.shifting_coef if self.params.shifting != "none" else 0.0),
-            shift_surface=self.params.shifting == "all", skin=self.SKIN,
+            shift_surface=self.params.shifting == "all",
+            shift_speed=self.params.shifting_speed, skin=self.SKIN,
             wall_friction=self.scene.fluid.wall_friction,
             film_tension=self.scene.fluid.film_tension, **self.fluid_options)
         self.nrm = nrm

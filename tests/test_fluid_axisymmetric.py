@@ -548,6 +548,36 @@ def test_shifting_evens_the_cover_and_keeps_the_surface():
     assert np.array_equal(f.M, M)
 
 
+
+def test_shifting_speed_max_shifts_resting_rings():
+    """``shift_speed`` ("local": dr = -A h |v_i| dt grad C; "max": |v_i| -> the largest
+    fluid speed): on the perturbed lattice with the rings at r < 6 dx at rest and the rest
+    moving at 1 m/s, "local" leaves the resting rings where they are (a stagnation point
+    is not regularised) and "max" moves them exactly as the moving rings of a uniform
+    flow; the moving rings shift the same either way."""
+    dx = 1e-3
+    x, kind, M, nrm, nf = _wall_block(dx, 1000.0)
+    rng = np.random.default_rng(3)
+    x[:nf] += rng.uniform(-0.15, 0.15, (nf, 2)) * dx
+    pa = FluidParams(rho0=1000.0, c0=10.0, mu=0.0, delta=0.0, alpha=0.0)
+    rest = (kind == FLUID) & (x[:, 0] < 6 * dx)
+    moved = {}
+    for mode in ("local", "max", "uniform"):
+        v = np.zeros_like(x)
+        v[(kind == FLUID) & (~rest if mode != "uniform" else True), 0] = 1.0
+        f = AxisymmetricFluid(x, v, np.full(len(x), 1000.0), kind, M, dx * dx, 3 * dx, pa,
+                              wall_normals=nrm, shifting=5.0 / 3.0,
+                              shift_speed="local" if mode == "uniform" else mode)
+        f._shift(0.2 * dx)
+        moved[mode] = np.linalg.norm(f.x - x, axis=1)
+    assert moved["local"][rest].max() == 0.0
+    assert moved["max"][rest].max() > 1e-3 * dx
+    assert np.allclose(moved["max"], moved["uniform"], rtol=1e-12, atol=0.0)
+    assert np.array_equal(moved["max"][~rest], moved["local"][~rest])
+    with pytest.raises(ValueError, match="shift_speed"):
+        AxisymmetricFluid(x, v, np.full(len(x), 1000.0), kind, M, dx * dx, 3 * dx, pa,
+                          shift_speed="fast")
+
 def test_verlet_skin_gives_the_same_steps_bitwise():
     """The neighbour list with a Verlet skin (reused until a ring has moved R skin / 2) and a
     list rebuilt at every evaluation give the same impact to the bit: every pair kernel skips

@@ -717,7 +717,7 @@ class AxisymmetricFluid:
                  no_penetration: bool = False, renorm_lambda_min: float = 0.2,
                  fragment_hoop: bool = True, shifting: float = 0.0,
                  wall_tension: bool = True, free_surface_no_tension: bool = False,
-                 shift_surface: bool = True, skin: float = 0.0,
+                 shift_surface: bool = True, shift_speed: str = "local", skin: float = 0.0,
                  wall_friction: str = "sph", film_tension: bool = False,
                  csf_axis_curvature: bool = False):
         self.x = np.array(x, dtype=np.float64)
@@ -779,6 +779,11 @@ class AxisymmetricFluid:
         #: True: surface rings shifted along the surface ("all"); False: not at all
         #: ("interior"), as ``[fluid] shifting`` of the planar solver
         self.shift_surface = bool(shift_surface)
+        if shift_speed not in ("local", "max"):
+            raise ValueError(f"shift_speed must be 'local' or 'max', got {shift_speed!r}")
+        #: the speed of the shifting law: "local" |v_i|, "max" the largest fluid speed
+        #: (``[fluid] shifting_speed``)
+        self.shift_speed = shift_speed
         #: largest shift of the last step / h
         self.last_shift = 0.0
         self.csf = (AxisymmetricCSF(surface_tension, self.kcode, hoop=not self.planar,
@@ -1117,7 +1122,7 @@ class AxisymmetricFluid:
         0.1 h_i; the density follows, rho_i += <grad rho>_i . dr_i; the ring keeps its mass
         (its meridian area follows from r_i).  It moves the rings towards an even planar
         cover sum_j A_j W_ij = 1 (the areas, not the spacing, are evened out)."""
-        from sphfem.fluid.surface import shift
+        from sphfem.fluid.surface import shift, shift_floor_speed
 
         a = self.augmented
         n = self.n
@@ -1133,7 +1138,8 @@ class AxisymmetricFluid:
                                    gcs, nrm, near, kind)
         out = np.zeros(n)
         shift(self.x, self.v, self.rho, kind, gcs, nrm, near, a["grad_rho"][:n],
-              self.shifting * hmax, dt, 0.1 * hmin, self.shift_surface, out)
+              self.shifting * hmax, dt, 0.1 * hmin, self.shift_surface, out,
+              shift_floor_speed(self.v, self.kind, self.shift_speed))
         self.last_shift = float(out.max() / hmin)
 
     def _reflect(self) -> None:

@@ -137,6 +137,11 @@ FLUID = Section("fluid", (
               "only; needs the free-surface detection (switched on)"),
     Param("shifting_coef", float, 5.0 / 3.0, positive=True,
           doc="A of the shifting law (Park 2019: 5/3)"),
+    Param("shifting_speed", str, "local", choices=("local", "max"),
+          doc="the speed |v| in the shifting law: local = each particle's own (Skillen et "
+              "al. 2013; slow regions such as a stagnation point are hardly shifted); max = "
+              "the largest fluid speed of the step for every particle (the Mach-scaled "
+              "shift of Sun et al. 2017)"),
     Param("detect_free_surface", bool, False,
           doc="Marrone et al. (2010) free-surface detection every step (particle field "
               "`free_surface` = 1 on the surface); always on with shifting"),

@@ -204,10 +204,13 @@ def near_surface(kind, offsets, indices, flag, x, R, period, near):
 
 @njit(cache=True, parallel=True)
 def shift(x, v, rho, kind, gc, nrm, near, grad_rho, coef, dt, max_shift, project_surface,
-          out):
-    """Apply dr = -coef |v| dt grad C (projected on the tangent plane where ``near``
-    when ``project_surface``, skipped there otherwise), capped at ``max_shift``; the
-    density follows with grad rho . dr.  ``out[i]`` receives |dr|."""
+          out, v_floor=0.0):
+    """Apply dr = -coef max(|v|, ``v_floor``) dt grad C (projected on the tangent plane
+    where ``near`` when ``project_surface``, skipped there otherwise), capped at
+    ``max_shift``; the density follows with grad rho . dr.  ``out[i]`` receives |dr|.
+    ``v_floor`` = the largest fluid speed gives every particle the shift of the fastest
+    one (Sun et al. 2017's Ma-scaled shift), so slow regions (stagnation points) are
+    regularised too."""
     n, dim = x.shape
     for i in prange(n):
         out[i] = 0.0
@@ -218,7 +221,7 @@ def shift(x, v, rho, kind, gc, nrm, near, grad_rho, coef, dt, max_shift, project
         sp = 0.0
         for k in range(dim):
             sp += v[i, k] * v[i, k]
-        D = coef * np.sqrt(sp) * dt
+        D = coef * max(np.sqrt(sp), v_floor) * dt
         dr = np.zeros(3)
         for k in range(dim):
             dr[k] = -D * gc[i, k]
@@ -242,3 +245,16 @@ def shift(x, v, rho, kind, gc, nrm, near, grad_rho, coef, dt, max_shift, project
             drho += grad_rho[i, k] * dr[k]
         rho[i] += drho
         out[i] = L
+
+
+def shift_floor_speed(v, kind, mode: str) -> float:
+    """The ``v_floor`` of :func:`shift` for the scene key ``[fluid] shifting_speed``:
+    0 for "local" (each particle's own |v|), the largest fluid speed for "max"."""
+    if mode == "local":
+        return 0.0
+    if mode != "max":
+        raise ValueError(f"[fluid] shifting_speed must be 'local' or 'max', got {mode!r}")
+    f = np.asarray(kind) == FLUID
+    if not f.any():
+        return 0.0
+    return float(np.sqrt((np.asarray(v)[f] ** 2).sum(axis=1).max()))

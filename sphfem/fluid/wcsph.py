@@ -516,7 +516,8 @@ class FluidSolver:
         if self.params.shifting != "none":
             surface.shift(p.x, p.v, p.rho, p.kind, s.gc, s.nrm, s.near, s.grad,
                           self.params.shifting_coef * self.h, dt, 0.1 * self.h,
-                          self.params.shifting == "all", s.shift)
+                          self.params.shifting == "all", s.shift,
+                          surface.shift_floor_speed(p.v, p.kind, self.params.shifting_speed))
             self.max_shift = max(self.max_shift, float(s.shift.max()))
         self.wall["integrate"] += time.perf_counter() - t0
         self.t += dt
