@@ -700,7 +700,8 @@ class AxisymmetricFluid:
     (:mod:`sphfem.fluid.axisymmetric_surface_tension`); 0: off.  ``film_tension``: its
     thin-film model (same module, "Thin films"; default off).  ``csf_axis_curvature``: the
     CSF's axis band takes its curvature from the band's edge (same module, "Curvature at
-    the axis"; default off).
+    the axis"; default off).  ``csf_curvature_smoothing``: the CSF's curvature averaged
+    along the surface over this many supports (same module, "Curvature smoothing"; 1: off).
 
     ``skin`` (> 0): a Verlet list (Verlet 1967): the neighbour list and the axis mirrors
     reach R (1 + skin) and are reused until R + 2 max_i |x_i - x_i,build| exceeds that
@@ -719,7 +720,7 @@ class AxisymmetricFluid:
                  wall_tension: bool = True, free_surface_no_tension: bool = False,
                  shift_surface: bool = True, shift_speed: str = "local", skin: float = 0.0,
                  wall_friction: str = "sph", film_tension: bool = False,
-                 csf_axis_curvature: bool = False):
+                 csf_axis_curvature: bool = False, csf_curvature_smoothing: float = 1.0):
         self.x = np.array(x, dtype=np.float64)
         n = self.n = self.x.shape[0]
         self.v = np.array(v, dtype=np.float64).reshape(n, 2)
@@ -787,7 +788,8 @@ class AxisymmetricFluid:
         #: largest shift of the last step / h
         self.last_shift = 0.0
         self.csf = (AxisymmetricCSF(surface_tension, self.kcode, hoop=not self.planar,
-                                    film=film_tension, axis_curvature=csf_axis_curvature)
+                                    film=film_tension, axis_curvature=csf_axis_curvature,
+                                    curvature_smoothing=csf_curvature_smoothing)
                     if surface_tension > 0.0 else None)
         self.wall_normals = None if wall_normals is None else np.asarray(
             wall_normals, float).reshape(n, 2)

@@ -598,6 +598,53 @@ def axis_curvature_extension(x, kappa, omega, kind, n, r_in, r_out, R, Lz=0.0):
     kappa[rows] = np.where(ok, s * kappa[rows] + (1.0 - s) * ke, kappa[rows])
 
 
+@njit(cache=True, parallel=True)
+def _smooth_rows(x, w, kappa, nrows, offsets, indices, Rs, Lz, out):
+    """out[i] = sum_j w_j f(d_ij / Rs) kappa_j / sum_j w_j f(d_ij / Rs) over j = i and its
+    list neighbours (f the Wendland C2 shape; z minimum image when Lz > 0), i < nrows."""
+    for i in prange(nrows):
+        num = w[i] * kappa[i]
+        den = w[i]
+        for jj in range(offsets[i], offsets[i + 1]):
+            j = indices[jj]
+            dr = x[j, 0] - x[i, 0]
+            dz = x[j, 1] - x[i, 1]
+            if Lz > 0.0:
+                dz -= Lz * np.rint(dz / Lz)
+            u = math.sqrt(dr * dr + dz * dz) / Rs
+            if u >= 1.0:
+                continue
+            a = 1.0 - u
+            wf = w[j] * a * a * a * a * (1.0 + 4.0 * u)
+            num += wf * kappa[j]
+            den += wf
+        out[i] = num / den
+
+
+def smooth_curvature(x, A, omega, kappa, n, Rs, Lz=0.0):
+    """kappa_i <- sum_j w_ij kappa_j / sum_j w_ij for the rows with omega > 0 (real rows
+    i < n; j over all valid rows, mirrors included, and i itself), w_ij = omega_j A_j
+    f(|x_i - x_j| / Rs), f the Wendland C2 shape (``Lz`` > 0: z periodic, minimum image).
+    In place."""
+    from sphfem.neighbors import build_neighbor_list
+
+    valid = np.flatnonzero(omega > 0.0)  # ascending: the real rows come first
+    rows = int(np.count_nonzero(valid < n))
+    if rows == 0:
+        return
+    pts = np.ascontiguousarray(x[valid], dtype=np.float64)
+    lo, hi = pts.min(axis=0) - Rs, pts.max(axis=0) + Rs
+    period = np.zeros(2)
+    if Lz > 0.0:
+        lo[1], hi[1], period[1] = float(lo[1]), float(lo[1]) + Lz, Lz
+    nl = build_neighbor_list(pts, Rs, lo, hi, period)
+    out = np.empty(rows)
+    _smooth_rows(pts, np.ascontiguousarray(omega[valid] * A[valid]),
+                 np.ascontiguousarray(kappa[valid]), rows, nl.offsets, nl.indices,
+                 float(Rs), float(Lz), out)
+    kappa[valid[:rows]] = out
+
+
 class AxisymmetricCSF:
     """CSF surface tension ``sigma`` [N/m] for the augmented (real + mirror) particle set of
     :class:`~sphfem.fluid.axisymmetric.AxisymmetricFluid` (module docstring).
@@ -610,9 +657,12 @@ class AxisymmetricCSF:
 
     def __init__(self, sigma: float, kernel_code: int = kernels.WENDLAND_C2,
                  axis_band=AXIS_BAND, hoop: bool = True, film: bool = False,
-                 axis_curvature: bool = False):
+                 axis_curvature: bool = False, curvature_smoothing: float = 1.0):
         if not sigma >= 0.0:
             raise ValueError(f"surface tension sigma must be >= 0, got {sigma}")
+        if not curvature_smoothing >= 1.0:
+            raise ValueError("curvature_smoothing must be >= 1 (a multiple of the support "
+                             f"radius; 1: off), got {curvature_smoothing!r}")
         self.sigma = float(sigma)
         self.kernel_code = int(kernel_code)
         self.axis_band = tuple(float(a) for a in axis_band)
@@ -624,6 +674,10 @@ class AxisymmetricCSF:
         #: lambda_min, passed to :meth:`accumulate`) reaches this get no normal (None: off;
         #: experimental, module docstring "Curvature at the axis")
         self.axis_lambda_gate = None
+        #: the curvature of the valid rows replaced by its mean over the valid rows within
+        #: c R (:func:`smooth_curvature`), c this factor (1: off; module docstring,
+        #: "Curvature smoothing")
+        self.curvature_smoothing = float(curvature_smoothing)
         #: the film model (module docstring, "Thin films"): off by default
         self.film = bool(film)
         self.state = None
@@ -666,6 +720,10 @@ class AxisymmetricCSF:
             axis_curvature_extension(x, st.kappa, st.omega, kind, n, a * R, b * R, R,
                                      float(Lz))
         mirror_scalar(n, src, st.kappa)
+        if self.curvature_smoothing > 1.0:
+            smooth_curvature(x, A, st.omega, st.kappa, n, self.curvature_smoothing * R,
+                             float(Lz))
+            mirror_scalar(n, src, st.kappa)
         work = np.zeros((m, 2))
         csf_force(x, A, rho, kc, offsets, indices, R, ks, kcode, period, self.sigma,
                   DELTA_FACTOR, SHEPARD_MIN, st.g, st.omega, st.kappa, st.kbar, work)
