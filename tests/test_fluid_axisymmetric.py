@@ -642,3 +642,26 @@ def test_free_slip_ghost_kernel_equals_numpy():
         if src[q] < n and mtype[q] == 0 and kind[src[q]] == WALL:
             ref[n + q] = [-ref[src[q], 0], ref[src[q], 1]]
     assert np.array_equal(vd, ref)
+
+
+def test_axis_alpha_raises_the_artificial_viscosity_next_to_the_axis_only():
+    """``axis_alpha``: alpha c0 per row is the scene's alpha beyond two supports from the
+    axis, ``axis_alpha`` within one (mirrors alike, by |r|), smoothstep between; off (the
+    scene's alpha everywhere, bitwise) when not above it."""
+    dx = 1e-3
+    x, kind, M, nrm, nf = _wall_block(dx, 1000.0)
+    pa = FluidParams(rho0=1000.0, c0=10.0, mu=0.0, delta=0.0, alpha=0.02)
+    R = 3 * dx
+    for axis_alpha, expect_on in ((0.1, True), (0.01, False), (0.0, False)):
+        f = AxisymmetricFluid(x, np.zeros_like(x), np.full(len(x), 1000.0), kind, M,
+                              dx * dx, R, pa, wall_normals=nrm, axis_alpha=axis_alpha)
+        xa = np.array([[0.5 * R, 0.0], [-0.9 * R, 0.0], [1.5 * R, 0.0], [2.0 * R, 0.0],
+                       [5.0 * R, 0.0]])
+        a = f._alpha_c(xa, np.full(len(xa), R)) / pa.c0
+        if expect_on:
+            np.testing.assert_allclose(a, [0.1, 0.1, 0.02 + 0.08 * 0.5, 0.02, 0.02])
+        else:
+            assert np.array_equal(a, np.full(len(xa), 0.02))
+    with pytest.raises(ValueError, match="axis_alpha"):
+        AxisymmetricFluid(x, np.zeros_like(x), np.full(len(x), 1000.0), kind, M, dx * dx, R,
+                          pa, axis_alpha=-1.0)

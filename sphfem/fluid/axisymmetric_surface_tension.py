@@ -50,6 +50,15 @@ Passes (each a numba kernel; the planar ones are those of the planar CSF):
    band's rings with lambda_min at or above it; with 0.8 and ``axis_curvature`` the film's
    spurious accelerations next to the axis fall to <= 1.1e5 m/s^2 everywhere (interior
    -5e3 within one spacing, from -2.6e6);
+   Curvature smoothing (``curvature_smoothing`` = c > 1; 1 = off): the valid rows'
+   curvature replaced by its Wendland mean over the valid rows (and mirrors) within c R
+   (:func:`smooth_curvature`), a low-pass along the surface.  The curvature's response to
+   particle disorder grows as 1 / dx (a ripple of amplitude ~0.1 dx over a wavelength of
+   a few R): on the sphere's arcs jittered by 0.1 dx the outer arc's rms error is 0.14 /
+   0.35 / 0.66 of 2 / R0 at R0/dx = 10 / 20 / 40, and 0.06 / 0.10 / 0.19 with c = 2 (the
+   unjittered sphere unchanged, test).  In the axisymmetric impact that noise is not
+   harmless: ring waves of it converge on the axis (docs/validation/droplet_impact/
+   README.md, session 13);
 4. band curvature (Shepard extension) and force a_i = 2 sigma kbar_i g_i / rho_i
    (:func:`~sphfem.fluid.surface_tension_csf.csf_force`), with kappa copied to the mirrors.
 
