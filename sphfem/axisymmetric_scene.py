@@ -238,10 +238,15 @@ class AxisymmetricFluidModule(PhysicsModule):
     #: hole at the impact point by 2.7 t_c (10 m/s, D/dx 90; 3.2 t_c at 128); with it the
     #: impact point stayed wetted to 4 t_c at D/dx 90 (a gap opened next to it at 3.4 t_c),
     #: but at 128 it dried at 2.95 t_c: a partial fix (the interior rings next to the axis
-    #: keep a spurious pull)
+    #: keep a spurious pull).  The CSF's curvature is averaged along the surface over two
+    #: supports (``csf_curvature_smoothing``): its response to particle disorder grows as
+    #: 1 / dx, and ring waves of that noise converge on the axis; without the average the
+    #: centre of the 10 m/s lamella flowed inwards and broke up from 2.0-2.6 t_c at D/dx 90
+    #: and 128 (and 181), with it the centre stays whole to 4 t_c at 128 (session 13,
+    #: docs/validation/droplet_impact/README.md)
     fluid_options = {"adaptive_h": False, "wall_tension": False,
                      "free_surface_no_tension": True, "fragment_hoop": False,
-                     "csf_axis_curvature": True}
+                     "csf_axis_curvature": True, "csf_curvature_smoothing": 2.0}
     #: Verlet skin of the fluid's (and the heat's) neighbour list, as a fraction of R: the
     #: list reaches R (1 + SKIN) and is rebuilt only when a ring has moved R SKIN / 2.
     #: Every pair kernel skips pairs beyond its support and list rows are sorted by index,
