@@ -600,7 +600,7 @@ class CouplingModule(PhysicsModule):
               "driver": ("history", "peak", "max_force_residual", "max_moment_residual",
                          "n_written", "every_k"),
               "thermal": ("t_last", "q_ideal", "history", "T_impact_max", "T_impact_max_t",
-                          "uncovered_max", "fluid_e0"),
+                          "uncovered_max", "fluid_e0", "T_fluid", "T_s0", "impact_point"),
               "heat": ("T", "t", "steps", "factorisations", "H0", "_h0_key", "heat_in",
                        "heat_dirichlet"),
               "interface": ("t", "t_wet", "s2", "strain", "heat_to_substrate",
@@ -648,6 +648,8 @@ class CouplingModule(PhysicsModule):
                 setattr(obj, a, v.records() if isinstance(v, PickledRecords) else v)
         if self.driver.thermal is not None:
             self.driver.thermal.heat._lu = {}  # factorised again for the restored H0
+            if "T_fluid" in state["thermal"]:  # (checkpoints before 2026-12-03 lack it)
+                self.driver.thermal.reference_from_initial_state()
 
     @staticmethod
     def _resumed_in_contact(t: float) -> dict:

@@ -250,14 +250,10 @@ class SubstrateHeat:
         kf, rf, cf = fluid
         self.e_f = math.sqrt(kf * rf * cf)
         self.e_s = math.sqrt(heat.k * heat.rho * heat.c)
-        self.T_contact = (self.e_f * self.T_fluid + self.e_s * self.T_s0) / (self.e_f + self.e_s)
-        self._C = (self.e_f * self.e_s * (self.T_fluid - self.T_s0)
-                   / ((self.e_f + self.e_s) * math.sqrt(math.pi)))
         self.params = dict(params or {})
         self.impact_point = np.asarray(impact_point, float)
         self._locate = TensorProbe(heat.mesh)
-        self._P_impact = self._locate(self.impact_point[None, :])
-        self._impact_node = int(np.argmin(np.linalg.norm(itf.X - self.impact_point, axis=1)))
+        self.reference_from_initial_state()
         self.t_last: float | None = None
         self.q_ideal = 0.0
         self.history: list[dict] = []
@@ -268,6 +264,19 @@ class SubstrateHeat:
         self._nodal = None
         self.setup_s = 0.0
         self.timings = {"exchange": 0.0, "nodal_T": 0.0}
+
+    def reference_from_initial_state(self) -> None:
+        """The ideal contact's temperature and flux constant, and the impact point's probe
+        and node, from ``T_fluid``, ``T_s0`` and ``impact_point`` (the state at t = 0; a
+        resumed run restores those three from its checkpoint and calls this again: built
+        from the resumed particles, the fluid's mean temperature and centre are not the
+        initial ones)."""
+        self.T_contact = (self.e_f * self.T_fluid + self.e_s * self.T_s0) / (self.e_f + self.e_s)
+        self._C = (self.e_f * self.e_s * (self.T_fluid - self.T_s0)
+                   / ((self.e_f + self.e_s) * math.sqrt(math.pi)))
+        self._P_impact = self._locate(self.impact_point[None, :])
+        self._impact_node = int(np.argmin(np.linalg.norm(self.itf.X - self.impact_point,
+                                                         axis=1)))
 
     def disconnect_wall_conduction(self, ctx, material_id: int) -> None:
         """k = 0 on every particle of the coupled material (wall particles and their heat
