@@ -608,7 +608,7 @@ def axis_curvature_extension(x, kappa, omega, kind, n, r_in, r_out, R, Lz=0.0):
 
 
 @njit(cache=True, parallel=True)
-def _smooth_rows(x, w, kappa, nrows, offsets, indices, Rs, Lz, out):
+def _smooth_rows(x, w, kappa, nrows, offsets, indices, Rs, Lz, kernel_code, out):
     """out[i] = sum_j w_j f(d_ij / Rs) kappa_j / sum_j w_j f(d_ij / Rs) over j = i and its
     list neighbours (f the Wendland C2 shape; z minimum image when Lz > 0), i < nrows."""
     for i in prange(nrows):
@@ -620,11 +620,7 @@ def _smooth_rows(x, w, kappa, nrows, offsets, indices, Rs, Lz, out):
             dz = x[j, 1] - x[i, 1]
             if Lz > 0.0:
                 dz -= Lz * np.rint(dz / Lz)
-            u = math.sqrt(dr * dr + dz * dz) / Rs
-            if u >= 1.0:
-                continue
-            a = 1.0 - u
-            wf = w[j] * a * a * a * a * (1.0 + 4.0 * u)
+            wf = w[j] * kernel_f(math.sqrt(dr * dr + dz * dz) / Rs, kernel_code)
             num += wf * kappa[j]
             den += wf
         out[i] = num / den
@@ -650,7 +646,7 @@ def smooth_curvature(x, A, omega, kappa, n, Rs, Lz=0.0):
     out = np.empty(rows)
     _smooth_rows(pts, np.ascontiguousarray(omega[valid] * A[valid]),
                  np.ascontiguousarray(kappa[valid]), rows, nl.offsets, nl.indices,
-                 float(Rs), float(Lz), out)
+                 float(Rs), float(Lz), kernels.WENDLAND_C2, out)
     kappa[valid[:rows]] = out
 
 
