@@ -298,6 +298,10 @@ class CouplingDriver:
             h0 = self.history[0]  # the state before the first step: no load if no contact
             out["start"] = {"t": h0["t"], "peak_von_mises_Pa": h0["peak_von_mises"],
                             "force_sensors": h0["force_sensors"]}
+            # the largest wall-normal load (the last axis is the wall normal) and its time
+            hp = max(self.history, key=lambda r: abs(r["force_sensors"][-1]))
+            out["peak_normal_force_N"] = abs(hp["force_sensors"][-1])
+            out["peak_normal_force_t_s"] = hp["t"]
             h = self.history[-1]
             out["last"] = {k: h[k] for k in ("t", "force_sensors", "force_load",
                                              "unassigned_force", "mean_stress") if k in h}

@@ -180,6 +180,10 @@ def test_no_load_before_contact_and_contact_time(tmp_path, cache):
     assert all(h["peak_von_mises"] < roundoff and h["force_sensors"] == [0.0, 0.0]
                for h in before)
     assert max(h["peak_von_mises"] for h in hist) > 1e3 * roundoff  # and a load after it
+    # the impact force's peak: the largest wall-normal sensor force of the history
+    peak = max(hist, key=lambda h: abs(h["force_sensors"][-1]))
+    assert c["peak_normal_force_N"] == abs(peak["force_sensors"][-1]) > 0.0
+    assert c["peak_normal_force_t_s"] == peak["t"] > t_contact
     # contact at the end of the step in which the ballistic contact time falls
     # a pair closes at most at |u|: contact needs >= (d0 - R) / |u|; equal here, as the two
     # lattices are vertically aligned (a pair straight above another)

@@ -223,6 +223,10 @@ def figures(summary: dict, speed: float, diameter: float) -> dict:
                       if win else math.nan),
         "T_impact_samples": len(rises),
         "vm_peak": cp["peak_von_mises_Pa"],
+        # the impact force: its peak over rho V^2 D^2, and when (t_c after contact)
+        "force_peak": (cp.get("peak_normal_force_N", math.nan)
+                       / (fmat["rho0"] * speed ** 2 * diameter ** 2)),
+        "force_t_tc": (cp.get("peak_normal_force_t_s", math.nan) - t_contact) / tc,
         "vm_t_tc": (cp.get("peak_von_mises_t_after_contact_s") or math.nan) / tc,
         "vm_r_m": cp["peak_von_mises_location_m"][0],
         "vm_z_m": cp["peak_von_mises_location_m"][-1],
@@ -361,6 +365,10 @@ def speed_criteria(speed: float, levels, figs: list[dict], quick: bool = False):
                  "ideal contact over the run's wetted-area history; peak / thermal plateau "
                  f"E alpha dT_c / (1 - nu) = {fin['vm_thermal'] / 1e6:.1f} MPa: "
                  + ", ".join(f"{f['vm_peak'] / f['vm_thermal']:.3f}" for f in figs)
+                 + f" at D/dx = {list(levels)}")
+    notes.append(f"{tag}: peak wall-normal force / (rho V^2 D^2): "
+                 + ", ".join(f"{f.get('force_peak', math.nan):.3f} at "
+                             f"{f.get('force_t_tc', math.nan):.2f} t_c" for f in figs)
                  + f" at D/dx = {list(levels)}")
     notes.append(f"{tag}: impact point, window [{T_WINDOW[0]}, {T_WINDOW[1]}] t_c: max "
                  "|rise / strained-contact rise - 1| "
