@@ -435,7 +435,8 @@ class AxisymmetricFluidModule(PhysicsModule):
                                "rings_outside_domain)", ctx.t + dt)
         self.impulse += dt * float(ctx.particles.f_fluid[:, 1].sum())
         if self.wall_top is not None and self.D0 > 0 and ctx.t + dt >= self._next_spread:
-            self.spread.append([ctx.t + dt, self.contact_diameter(ctx.particles)])
+            self.spread.append([ctx.t + dt, self.contact_diameter(ctx.particles),
+                                self.root_diameter(ctx.particles)])
             self._next_spread = ctx.t + dt + self.spread_every
 
     def _depth(self, s) -> float:
@@ -493,6 +494,20 @@ class AxisymmetricFluidModule(PhysicsModule):
         r_edge = r[gap[0]] if gap.size else r[-1]
         return float(2.0 * r_edge + self.dx)
 
+    #: the lamella's root is where the wall-attached fluid is thinner than this [D0]
+    ROOT_THICKNESS_D = 0.05
+
+    def root_diameter(self, ps) -> float:
+        """Diameter of the lamella's root [m] (:func:`sphfem.fluid.spreading.
+        lamella_root_radius` with the thickness threshold ROOT_THICKNESS_D D0 = R0 / 10):
+        where the droplet's body ends and the sheet along the wall begins (Wagner's
+        turnover point; the contact diameter is the sheet's tip)."""
+        from sphfem.fluid.spreading import lamella_root_radius
+
+        fl = ps.kind == FLUID
+        return 2.0 * lamella_root_radius(ps.x[fl, 0], ps.x[fl, 1], self.wall_top, self.dx,
+                                         self.ROOT_THICKNESS_D * self.D0)
+
     def momentum(self, ps) -> float:
         """Axial momentum sum_i M_i v_z,i of the fluid rings [kg m/s]."""
         fl = ps.kind == FLUID
@@ -515,7 +530,9 @@ class AxisymmetricFluidModule(PhysicsModule):
     def diagnostics(self, ctx) -> dict:
         ps, s = ctx.particles, self.solver
         fl = ps.kind == FLUID
-        sp = np.array(self.spread) if self.spread else np.zeros((0, 2))
+        # (rows of a run resumed from an older checkpoint have no root: nan)
+        sp = (np.array([list(row) + [math.nan] * (3 - len(row)) for row in self.spread])
+              if self.spread else np.zeros((0, 3)))
         # thin the history to ~400 rows for summary.json
         keep = sp[:: max(1, len(sp) // 400)] if len(sp) else sp
         d = {"geometry": "axisymmetric", "fluid_rings": int(fl.sum()),
@@ -559,7 +576,9 @@ class AxisymmetricFluidModule(PhysicsModule):
                 # the film reached the end of the wall: the spreading is cut by the scene
                 "wall_end_reached": bool(0.5 * sp[k, 1] >= self._wall_r_max - ctx.R),
                 "history_t_s": keep[:, 0].tolist(),
-                "history_ratio": (keep[:, 1] / self.D0).tolist()}
+                "history_ratio": (keep[:, 1] / self.D0).tolist(),
+                # the lamella's root (Wagner's turnover point), R0 / 10 thickness threshold
+                "history_root_ratio": (keep[:, 2] / self.D0).tolist()}
         return d
 
 

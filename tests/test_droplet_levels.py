@@ -103,3 +103,61 @@ def test_convergence_script_reads_levels_from_an_earlier_json(tmp_path, capsys):
     with pytest.raises(SystemExit, match="speed 10.0 m/s, not 30"):
         conv.main(["30", "--out", str(out), "--levels", *map(str, levels),
                    "--t-end-tc", "4", "--figures-from", str(src)])
+
+
+def _summary(V=10.0, D=1e-4, dx=1e-4 / 90, t_contact=1e-7, root=1.0, tip=1.2):
+    """A summary.json of a run whose lamella root follows root x Wagner's sqrt(6 t / t_c)
+    and whose contact diameter tip x Wagner, counted from the surfaces' touching."""
+    tc = D / V
+    t_touch = t_contact + 2.0 * dx / V  # support 3 dx: the surfaces meet 2 dx later
+    ts = [t_touch + k * 0.02 * tc for k in range(1, 40)]
+    w = [math.sqrt(6.0 * (t - t_touch) / tc) for t in ts]
+    water = {"rho0": 1000.0, "mu": 3e-4, "sigma": 0.072, "k": 0.6, "c": 4000.0}
+    alumina = {"rho0": 3950.0, "k": 10.0, "c": 900.0, "E": 3e11, "nu": 0.21, "alpha": 8.1e-6}
+    return {
+        "t": 4 * tc, "steps": 10, "particles": {"total": 100}, "wall_s": 1.0,
+        "scene": {"materials": {"water": water, "alumina": alumina},
+                  "coupling": {"material": "alumina", "heat": {}},
+                  "sph": {"dx": dx, "support_factor": 3.0},
+                  "blocks": [{"kind": "fluid", "material": "water"}]},
+        "diagnostics": {
+            "fluid": {"mass_kg": 5e-10,
+                      "spreading": {"max_ratio": 4.0, "max_t_s": 2.5 * tc,
+                                    "history_t_s": ts,
+                                    "history_ratio": [tip * x for x in w],
+                                    "history_root_ratio": [root * x for x in w]}},
+            "coupling": {
+                "t_contact_s": t_contact, "peak_von_mises_Pa": 6e7,
+                "peak_von_mises_t_after_contact_s": tc,
+                "peak_von_mises_location_m": [0.0, 0.0],
+                "peak_normal_force_N": 0.9 * 1000.0 * V * V * D * D,
+                "peak_normal_force_t_s": t_contact + 0.25 * tc,
+                "substrate_heat": {"substrate_initial_temperature_K": 293.15,
+                                   "ideal_contact_temperature_K": 313.15,
+                                   "fluid_initial_temperature_K": 373.15,
+                                   "history": [{"t": t_contact + x * tc, "T_impact": 313.15}
+                                               for x in (0.2, 1.0, 1.8)],
+                                   "heat_to_substrate_J": 7e-5,
+                                   "ideal_contact_heat_J": 8e-5,
+                                   "fluid_substrate_residual_rel": 1e-15}}}}
+
+
+def test_figures_compare_the_lamella_root_with_wagner_from_the_touching():
+    """The Wagner ratio is the root's, on the clock started when the surfaces touch; the
+    tip's ratio is reported beside it; the impact force is over rho V^2 D^2."""
+    f = di.figures(_summary(root=1.0, tip=1.2), 10.0, 1e-4)
+    assert f["wagner_ratio"] == pytest.approx(1.0, rel=1e-12)
+    assert f["wagner_tip_ratio"] == pytest.approx(1.2, rel=1e-12)
+    assert f["force_peak"] == pytest.approx(0.9) and f["force_t_tc"] == pytest.approx(0.25)
+    g = di.figures(_summary(root=0.9, tip=1.2), 10.0, 1e-4)
+    assert g["wagner_ratio"] == pytest.approx(0.9, rel=1e-12)
+    crit, notes = di.speed_criteria(10.0, (64, 90, 128), [f, f, f])
+    assert crit["10 m/s Wagner"].passed
+    assert any("lamella root / Wagner: 1.000" in n and "tip) / Wagner: 1.200" in n
+               for n in notes), notes
+    crit, _ = di.speed_criteria(10.0, (64, 90, 128), [g, g, _figs_root(0.85)])
+    assert not crit["10 m/s Wagner"].passed
+
+
+def _figs_root(ratio):
+    return di.figures(_summary(root=ratio), 10.0, 1e-4)

@@ -198,3 +198,71 @@ def test_spreading_study_scenes_parse():
         assert sc.sph.dx == pytest.approx(study.D / c["n"])
         tc = study.D / c["v"]
         assert sc.time.t_end == pytest.approx(sc.support_radius / c["v"] + study.T_TC * tc)
+
+
+
+def _lattice(R, dx):
+    g = (np.arange(int(2.5 * R / dx)) + 0.5) * dx
+    r, z = np.meshgrid(g, g, indexing="ij")
+    return g, r.ravel(), z.ravel()
+
+
+def _sheet(r, z, rc, dx, rows=2, out=1.4):
+    return (r > rc) & (r <= out * rc) & (z < rows * dx)
+
+
+@pytest.mark.parametrize("d_over_R", [0.1, 0.25, 0.5])
+def test_lamella_root_converges_to_the_contact_radius(d_over_R):
+    """A sphere pressed d into the wall (the part below cut off) with a two-row sheet from
+    its contact radius r_c = sqrt(R^2 - (R - d)^2) outwards: the sphere overhangs the sheet
+    in a wedge of air that opens with slope s = r_c / (R - d), and the root is found where
+    the wedge above the sheet is wider than ``gap`` spacings: within (gap + rows + 1) dx / s
+    + 2 dx beyond r_c (a bound that falls with dx), never inside it.  The wetted edge is
+    the sheet's tip."""
+    R, gap, rows = 1.0, 2.5, 2
+    d = d_over_R * R
+    rc = math.sqrt(R * R - (R - d) ** 2)
+    slope = rc / (R - d)
+    for dx in (R / 40, R / 80, R / 160):
+        _, r, z = _lattice(R, dx)
+        keep = (r ** 2 + (z - (R - d)) ** 2 <= R * R) | _sheet(r, z, rc, dx, rows)
+        r, z = r[keep], z[keep]
+        root = sp.lamella_root_radius(r, z, 0.0, dx, 0.1 * R, gap=gap)
+        err = root - rc
+        assert -dx <= err <= (gap + rows + 1) * dx / slope + 2 * dx, (dx, root, rc)
+        x = np.column_stack([r, z])
+        tip = r[z < dx].max()
+        assert sp.contact_diameter(x, 0.0, dx, center=[0.0]) == pytest.approx(
+            2 * (tip + 0.5 * dx))
+        assert tip > 1.3 * rc
+
+
+def test_lamella_root_of_a_column_and_an_overhanging_blob():
+    """A vertical column r <= r_c with a sheet beyond it: the root is r_c to within one
+    spacing for any threshold between the sheet and the column; a blob hanging over the
+    sheet with three spacings of air below it is not wall-attached, and closing that air
+    moves the root out to the blob's edge."""
+    R, dx = 1.0, 1.0 / 40
+    rc = 0.6 * R
+    g, r, z = _lattice(R, dx)
+    keep = ((r <= rc) & (z <= R)) | _sheet(r, z, rc, dx)
+    for thr in (0.05, 0.1, 0.5):
+        assert abs(sp.lamella_root_radius(r[keep], z[keep], 0.0, dx, thr * R) - rc) <= dx
+    blob = (r > rc) & (r < 1.2 * rc) & (z > 5 * dx) & (z < 20 * dx)
+    assert abs(sp.lamella_root_radius(r[keep | blob], z[keep | blob], 0.0, dx, 0.1 * R)
+               - rc) <= dx
+    blob = (r > rc) & (r < 1.2 * rc) & (z < 20 * dx)
+    assert abs(sp.lamella_root_radius(r[keep | blob], z[keep | blob], 0.0, dx, 0.1 * R)
+               - 1.2 * rc) <= 2 * dx  # the bin width
+
+
+def test_lamella_root_edge_cases():
+    dx = 0.1
+    assert sp.lamella_root_radius([], [], 0.0, dx, 1.0) == 0.0
+    # a film thinner than the threshold everywhere: no body
+    r = np.arange(50) * dx
+    assert sp.lamella_root_radius(r, np.full(50, 0.5 * dx), 0.0, dx, 1.0) == 0.0
+    # nothing on the wall at the axis (the fluid still in the air): no root
+    assert sp.lamella_root_radius(r, np.full(50, 5 * dx), 0.0, dx, 0.1) == 0.0
+    with pytest.raises(ValueError, match="shape"):
+        sp.lamella_root_radius([0.0, 1.0], [0.0], 0.0, dx, 1.0)

@@ -39,7 +39,9 @@ particles lying within ``within`` particle spacings above the wall, plus one spa
 particle stands for a cell of width dx, so the fluid reaches dx/2 beyond its centre),
 optionally over the largest connected sheet only (``link``); :func:`area_diameter` is the
 diameter of a disc with the wetted area.  The maximum spreading is the largest wetted
-diameter over the frames.
+diameter over the frames.  The wetted edge is the tip of the sheet the impact ejects along
+the wall; :func:`lamella_root_radius` finds the sheet's root, where the droplet's body
+ends (the radius Wagner's theory predicts).
 
 Artificial viscosity: the Monaghan (1992) term with pair coefficient alpha h c0 acts in the
 continuum limit as a kinematic viscosity nu_art = alpha h c0 / (2 (d + 2)) (Monaghan 2005,
@@ -280,6 +282,53 @@ def area_diameter(x, wall_level: float, dx: float, kind=None, *, axis: int = -1,
     if lateral.shape[1] == 1:
         return float(n * dx)
     return float(2.0 * math.sqrt(n * dx * dx / math.pi))
+
+
+def lamella_root_radius(r, z, wall_level: float, dx: float, min_thickness: float, *,
+                        bin_width: float = 2.0, gap: float = 2.5) -> float:
+    """Radius of the lamella's root [m]: where the droplet's body ends and the thin sheet
+    ejected along the wall begins (the turnover point of Wagner's theory, whose radius is
+    sqrt(3 R V t) early in the impact; Riboux & Josserand 2014, Phys. Rev. Lett. 113,
+    024507, measured this root, not the sheet's tip).
+
+    The fluid points (``r`` from the impact axis, ``z`` along the wall normal) are binned
+    in r over ``bin_width`` dx; a bin's wall-attached thickness is the height of the
+    topmost point reached from its lowest point (which must lie within 1.5 dx of
+    ``wall_level``) without a vertical gap wider than ``gap`` dx.  The root is the
+    outermost point (+ dx / 2) of the last bin, walking out from the axis, whose thickness
+    is at least ``min_thickness`` [m] (a length between the lamella's thickness and the
+    body's height, e.g. R / 10 early in the impact); 0 when the first bin is already
+    thinner.  Where the body overhangs the sheet in a wedge of air (a sphere meeting the
+    wall), the root is found where the wedge is wider than ``gap`` dx: it converges to the
+    contact point as dx -> 0.
+    """
+    r = np.asarray(r, float)
+    z = np.asarray(z, float) - wall_level
+    if r.shape != z.shape:
+        raise ValueError(f"r and z differ in shape: {r.shape} vs {z.shape}")
+    if not len(r):
+        return 0.0
+    w = bin_width * dx
+    b = np.floor(r / w).astype(np.int64)
+    order = np.lexsort((z, b))  # by bin, then by height
+    b, z, r = b[order], z[order], r[order]
+    starts = np.flatnonzero(np.r_[True, b[1:] != b[:-1]])
+    ends = np.r_[starts[1:], len(b)]
+    edge = 0.0
+    expected = 0
+    for s, e in zip(starts, ends, strict=True):
+        if b[s] != expected:  # an empty bin: the body has ended
+            break
+        zz = z[s:e]
+        if zz[0] > 1.5 * dx:  # nothing on the wall here
+            break
+        jumps = np.flatnonzero(np.diff(zz) > gap * dx)
+        top = zz[jumps[0]] if jumps.size else zz[-1]
+        if top < min_thickness:
+            break
+        edge = float(r[s:e].max()) + 0.5 * dx  # each point stands for a cell dx wide
+        expected += 1
+    return float(edge)
 
 
 def wendland_c2_2d(d, R: float):
