@@ -1,0 +1,186 @@
+"""Maximum spreading over a range of We and Re: axisymmetric SPH against the correlations.
+
+    python examples/droplet_impact/spreading_axisymmetric.py --out DIR
+    python examples/droplet_impact/spreading_axisymmetric.py --out DIR --re 100,300 --we 30
+    python examples/droplet_impact/spreading_axisymmetric.py --out DIR --refine --report FOLDER
+
+A droplet (D = 0.1 mm, rho = 1000 kg/m^3, V = 10 m/s: the packaged axisymmetric scene of
+:mod:`sphfem.validation.droplet_impact`, fluid only) hits the flat wall; each case sets the
+liquid's viscosity and surface tension from (We, Re): mu = rho V D / Re, sigma = rho V^2 D /
+We (c0 = 10 V, the scene's artificial viscosity alpha and wall friction).  The spacing puts
+three particles across the residual film of the spreading, h_res = 0.79 D Re^-0.4 (Roisman
+2009; :func:`sphfem.fluid.spreading.residual_film`), the rule under which the droplet
+study's figures settle (D/dx >= 3.8 Re^0.4: 24 at Re = 100, 61 at Re = 1000), and never
+fewer than ``--min-n`` particles across the droplet; ``--refine`` adds a level sqrt(2)
+finer per case.  Each run goes to ``--t-end`` t_c (4: past the maximum spreading at these
+We) and reports D_max / D (the contact diameter's maximum,
+:meth:`sphfem.axisymmetric_scene.AxisymmetricFluidModule.contact_diameter`) beside the
+correlations at the same (We, Re) and a 90 degree contact angle
+(:func:`sphfem.fluid.spreading.correlation_table`: Pasandideh-Fard et al. 1996, Ukiwe &
+Kwok 2005, Clanet et al. 2004, Roisman 2009, Laan et al. 2014).
+
+One JSON per run (``DIR/We<We>_Re<Re>_n<n>.json``; an existing one is kept, so an
+interrupted study resumes).  ``--report FOLDER`` writes ``results.json``, ``table.md`` and
+``spreading.png`` (D_max / D against Re, one colour per We, the correlations' band shaded).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import sys
+import time
+from pathlib import Path
+
+SPEED = 10.0  # m/s
+MIN_FILM_PARTICLES = 3.0
+
+
+def particles_across(Re: float, min_n: int, refine: bool = False) -> int:
+    """D/dx putting MIN_FILM_PARTICLES across h_res = 0.79 D Re^-0.4 (at least min_n), times
+    sqrt(2) when ``refine``."""
+    from sphfem.fluid.spreading import residual_film
+
+    n = max(min_n, math.ceil(MIN_FILM_PARTICLES / residual_film(1.0, Re)))
+    return math.ceil(n * math.sqrt(2.0)) if refine else n
+
+
+def scene_for(We: float, Re: float, n: int, t_end_tc: float) -> dict:
+    """The fluid-only axisymmetric droplet scene at (We, Re) with n particles across."""
+    from sphfem.validation import droplet_impact as di
+
+    d = di.scene_at(SPEED, n, t_end_tc)
+    drop = next(b for b in d["blocks"] if b["kind"] == "fluid")
+    mat = d["materials"][drop["material"]]
+    D, rho = 2.0 * drop["radius"], mat["rho0"]
+    mat["mu"] = rho * SPEED * D / Re
+    mat["sigma"] = rho * SPEED ** 2 * D / We
+    d["physics"]["modules"] = ["fluid"]
+    for section in ("coupling", "heat"):
+        d.pop(section, None)
+    d["output"]["every"] = f"{t_end_tc / 4} tc"
+    d["scene"]["name"] = f"spreading_We{We:g}_Re{Re:g}_n{n}"
+    d["scene"]["description"] = f"fluid-only droplet impact at We = {We:g}, Re = {Re:g}"
+    return d
+
+
+def run_case(We: float, Re: float, n: int, t_end_tc: float, out: Path,
+             refined: bool = False) -> dict:
+    """One case's record (read back if its JSON exists); ``refined``: the sqrt(2) level."""
+    from sphfem.api import run
+    from sphfem.fluid.spreading import correlation_table
+    from sphfem.scene import parse_scene
+
+    path = out / f"We{We:g}_Re{Re:g}_n{n}.json"
+    if path.exists():
+        return json.loads(path.read_text())
+    folder = out / path.stem
+    t0 = time.perf_counter()
+    scene = parse_scene(scene_for(We, Re, n, t_end_tc), source=path.stem)
+    run(scene, folder, overwrite=True)
+    s = json.loads((folder / "summary.json").read_text())
+    sp = s["diagnostics"]["fluid"]["spreading"]
+    drop = next(b for b in scene.blocks if b.kind == "fluid")
+    tc = 2.0 * drop.radius / SPEED
+    band = correlation_table(We, Re, 90.0)
+    rec = {"We": We, "Re": Re, "n": n, "refined": refined, "spread": sp["max_ratio"],
+           "spread_t_tc": sp["max_t_s"] / tc, "t_end_tc": s["t"] / tc,
+           "max_reached": sp["max_t_s"] < 0.98 * s["t"],
+           "film_particles": s["diagnostics"]["fluid"].get("residual_film", {}).get(
+               "particles_across"),
+           "correlations": band, "wall_s": time.perf_counter() - t0}
+    from sphfem.output import atomic_write_text
+
+    atomic_write_text(path, json.dumps(rec, indent=2))
+    return rec
+
+
+def report(records: list[dict], folder: Path) -> None:
+    """results.json, table.md and spreading.png in ``folder``."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from sphfem.fluid.spreading import correlation_table
+    from sphfem.output import atomic_write_text
+
+    folder.mkdir(parents=True, exist_ok=True)
+    records = sorted(records, key=lambda r: (r["We"], r["Re"], r["n"]))
+    atomic_write_text(folder / "results.json", json.dumps(records, indent=2))
+    names = list(records[0]["correlations"])
+    lines = ["| We | Re | D/dx | film particles | D_max/D (t/t_c) | correlations min-max | "
+             "outside the band | " + " | ".join(names) + " | wall s |",
+             "|" + "---|" * (8 + len(names))]
+    for r in records:
+        lo, hi = min(r["correlations"].values()), max(r["correlations"].values())
+        off = max(lo / r["spread"] - 1.0, r["spread"] / hi - 1.0, 0.0)
+        when = f"{r['spread_t_tc']:.2f}" + ("" if r["max_reached"] else ", not reached")
+        lines.append(
+            f"| {r['We']:g} | {r['Re']:g} | {r['n']} | {r['film_particles']:.1f} | "
+            f"{r['spread']:.2f} ({when}) | "
+            f"{lo:.2f}-{hi:.2f} | {off:.1%} | "
+            + " | ".join(f"{r['correlations'][k]:.2f}" for k in names)
+            + f" | {r['wall_s']:.0f} |")
+    atomic_write_text(folder / "table.md", "\n".join(lines) + "\n")
+    fig, ax = plt.subplots(figsize=(7, 4.5))
+    wes = sorted({r["We"] for r in records})
+    res = sorted({r["Re"] for r in records})
+    Re_line = [res[0] * (res[-1] / res[0]) ** (k / 40) for k in range(41)] if len(res) > 1 \
+        else res
+    for i, We in enumerate(wes):
+        c = f"C{i}"
+        band = [correlation_table(We, Re, 90.0).values() for Re in Re_line]
+        ax.fill_between(Re_line, [min(b) for b in band], [max(b) for b in band], color=c,
+                        alpha=0.15, lw=0)
+        for refine, marker in ((False, "o"), (True, "s")):
+            pts = sorted((r["Re"], r["spread"]) for r in records if r["We"] == We
+                         and r.get("refined", False) == refine)
+            if pts:
+                ax.plot(*zip(*pts, strict=True), marker, color=c, ls="-" if not refine
+                        else ":", label=f"We {We:g}" + (" (sqrt 2 finer)" if refine else ""))
+    ax.set_xscale("log")
+    ax.set_xlabel("Re")
+    ax.set_ylabel("D_max / D")
+    ax.set_title("axisymmetric SPH (points) vs correlations (bands, 90 deg)")
+    ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(folder / "spreading.png", dpi=120)
+    plt.close(fig)
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    p.add_argument("--out", type=Path, required=True, help="folder of the runs")
+    p.add_argument("--we", default="30,100,300", help="Weber numbers (comma separated)")
+    p.add_argument("--re", default="100,300,1000", help="Reynolds numbers (comma separated)")
+    p.add_argument("--min-n", type=int, default=24, help="fewest particles across D")
+    p.add_argument("--t-end", type=float, default=4.0, help="end time [t_c]")
+    p.add_argument("--refine", action="store_true", help="also run sqrt(2) finer")
+    p.add_argument("--report", type=Path, help="write results.json, table.md, spreading.png")
+    a = p.parse_args(argv)
+    try:
+        wes = [float(x) for x in a.we.split(",")]
+        res = [float(x) for x in a.re.split(",")]
+    except ValueError as e:
+        p.error(f"--we / --re: {e}")
+    if any(x <= 0 for x in wes + res):
+        p.error("--we / --re: must be positive")
+    a.out.mkdir(parents=True, exist_ok=True)
+    records = []
+    for Re in res:
+        for We in wes:
+            for refine in ((False, True) if a.refine else (False,)):
+                n = particles_across(Re, a.min_n, refine)
+                r = run_case(We, Re, n, a.t_end, a.out, refine)
+                print(f"We {We:g} Re {Re:g} D/dx {n}: D_max/D {r['spread']:.3f} at "
+                      f"{r['spread_t_tc']:.2f} t_c ({r['wall_s']:.0f} s)", flush=True)
+                records.append(r)
+    if a.report:
+        report(records, a.report)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
