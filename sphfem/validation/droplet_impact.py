@@ -41,7 +41,7 @@ Each figure gets an observed order, a Richardson limit and a GCI error bar
   Josserand 2014, who measured the root), its mean ratio over [0.1, 0.3] t_c after the
   surfaces touch within 10 % (the root: :func:`sphfem.fluid.spreading.lamella_root_radius`,
   where the wall-attached fluid becomes thinner than R0 / 10; the contact diameter is the
-  tip of the sheet ejected ahead of the root, 1.12-1.18 x Wagner at D/dx 64-128 at 10 m/s,
+  tip of the sheet ejected ahead of the root, 1.12-1.27 x Wagner at D/dx 64-181 at 10 m/s,
   reported); (b) D_max / D inside the
   band of the published correlations (:func:`sphfem.fluid.spreading.correlation_table` at
   the run's We and Re, contact angle 90 deg: Pasandideh-Fard 1996, Ukiwe & Kwok 2005, Clanet
