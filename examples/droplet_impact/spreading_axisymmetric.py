@@ -34,13 +34,12 @@ import time
 from pathlib import Path
 
 SPEED = 10.0  # m/s
-MIN_FILM_PARTICLES = 3.0
 
 
 def particles_across(Re: float, min_n: int, refine: bool = False) -> int:
-    """D/dx putting MIN_FILM_PARTICLES across h_res = 0.79 D Re^-0.4 (at least min_n), times
-    sqrt(2) when ``refine``."""
-    from sphfem.fluid.spreading import residual_film
+    """D/dx putting MIN_FILM_PARTICLES (:mod:`sphfem.fluid.spreading`, the droplet study's
+    rule) across h_res = 0.79 D Re^-0.4 (at least min_n), times sqrt(2) when ``refine``."""
+    from sphfem.fluid.spreading import MIN_FILM_PARTICLES, residual_film
 
     n = max(min_n, math.ceil(MIN_FILM_PARTICLES / residual_film(1.0, Re)))
     return math.ceil(n * math.sqrt(2.0)) if refine else n

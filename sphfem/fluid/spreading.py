@@ -315,9 +315,8 @@ def lamella_root_radius(r, z, wall_level: float, dx: float, min_thickness: float
     starts = np.flatnonzero(np.r_[True, b[1:] != b[:-1]])
     ends = np.r_[starts[1:], len(b)]
     edge = 0.0
-    expected = 0
-    for s, e in zip(starts, ends, strict=True):
-        if b[s] != expected:  # an empty bin: the body has ended
+    for k, (s, e) in enumerate(zip(starts, ends, strict=True)):
+        if b[s] != k:  # an empty bin: the body has ended
             break
         zz = z[s:e]
         if zz[0] > 1.5 * dx:  # nothing on the wall here
@@ -327,7 +326,6 @@ def lamella_root_radius(r, z, wall_level: float, dx: float, min_thickness: float
         if top < min_thickness:
             break
         edge = float(r[s:e].max()) + 0.5 * dx  # each point stands for a cell dx wide
-        expected += 1
     return float(edge)
 
 
