@@ -446,7 +446,14 @@ def record(paths: list[str], coarsen: float = 3.0, steps: int = 100,
             subprocess.run([sys.executable, "-m", "sphfem.jit_warmup", str(job)], env=env,
                            check=True, capture_output=True)
             entries = json.loads((Path(tmp) / "record.json").read_text())["kernels"]
-        scenes[record_key(scene)] = {"scene": Path(p).name, "kernels": entries}
+        import numba
+
+        versions = {"numba": numba.__version__, "python": list(sys.version_info[:2])}
+        for k in [k for k, v in scenes.items()  # a stale record of the same scene
+                  if v.get("scene") == Path(p).name and all(v.get(a) == b
+                                                            for a, b in versions.items())]:
+            del scenes[k]
+        scenes[record_key(scene)] = {"scene": Path(p).name, **versions, "kernels": entries}
         done[p] = len(entries)
     write_json(out, data)
     return done

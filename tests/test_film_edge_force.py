@@ -123,3 +123,28 @@ def test_scene_key_reaches_the_csf():
         d = di.scene_at(10.0, 8, 0.01, overrides=[f"fluid.film_tension={on}"])
         scene = parse_scene(d, source="test")
         assert scene.fluid.film_tension is on
+
+
+def test_a_lone_ring_gets_no_film_stress():
+    """A ring with no fluid neighbour within R next to the axis, whose area M / (2 pi r rho)
+    exceeds R^2, has Q = 0 in (F2) (the floor FILM_Q_MIN of a one-row film is 0 too): it
+    gets no film stress and the accelerations stay finite (a D/dx 61 impact with the model
+    went non-finite at 1.7 t_c from gamma / Q = inf on such a ring)."""
+    from sphfem.axisymmetric import ring_mass
+    from sphfem.fluid.axisymmetric import AxisymmetricFluid
+    from sphfem.fluid.wcsph import FluidParams
+
+    dx = 1e-6
+    film = [(20 * dx + (i + 0.5) * dx, (j + 0.5) * dx) for i in range(20) for j in range(2)]
+    x = np.array(film + [(2 * dx, 10 * dx), (60 * dx, 10 * dx)])  # two lone rings
+    n = len(x)
+    area = np.full(n, dx * dx)
+    area[-2] = 25 * dx * dx  # near the axis (its mirror 4 dx away): sqrt(A) = 5 dx > R
+    pa = FluidParams(rho0=1000.0, c0=5.0, mu=1e-3, delta=0.1, alpha=0.0, gravity=(0.0, 0.0))
+    f = AxisymmetricFluid(x, np.zeros((n, 2)), np.full(n, 1000.0), np.full(n, FLUID),
+                          ring_mass(x[:, 0], 1000.0, area), area, 3 * dx, pa,
+                          surface_tension=0.072, film_tension=True)
+    assert np.isfinite(f.acc).all() and np.isfinite(f.csf.film_stress).all()
+    assert np.all(f.csf.film_stress[-2] == 0.0)  # Q = 0 next to the axis: no stress
+    assert np.all(f.csf.film_acc[-2:] == 0.0)  # no neighbour: no force
+    assert np.abs(f.csf.film_acc[:-2]).max() > 0.0  # the film itself is pulled

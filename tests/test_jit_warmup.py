@@ -233,3 +233,26 @@ def test_shipped_records_resolve():
             assert all(isinstance(pickle.loads(base64.b64decode(s)), tuple) for s in e["sigs"])
     if not checked:
         pytest.skip("no record for this numba and Python")
+
+
+def test_shipped_records_are_not_stale():
+    """A record of a shipped scene made with this numba and Python must be found under the
+    scene's current kernel key: a scene or section change since the record (a new key, a
+    new choice) changes that key, and a stale record makes a first run compile on one core
+    (the axisymmetric droplet job's cold start was 60.5 s with a stale record, 41.9 s
+    re-recorded, 2026-12-04).  Mend:
+    ``python -m sphfem.jit_warmup --record examples/droplet_impact/droplet_impact.toml
+    examples/droplet_impact/droplet_impact_axisymmetric.toml``."""
+    import numba
+
+    from sphfem.jit_warmup import SIGNATURES, recorded
+
+    scenes = json.loads(SIGNATURES.read_text())["scenes"]
+    here = {"numba": numba.__version__, "python": list(sys.version_info[:2])}
+    same = [v["scene"] for v in scenes.values()
+            if all(v.get(a) == b for a, b in here.items())]
+    if not same:
+        pytest.skip("no record for this numba and Python")
+    for name in same:
+        assert recorded(load_scene(DROPLET.parent / name)) is not None, (
+            f"the record of {name} is stale: re-record it (see this test's docstring)")

@@ -784,7 +784,10 @@ class AxisymmetricCSF:
         # Q no less than FILM_Q_MIN of a one-row film's (fragments of a few close rings
         # would otherwise get tau ~ 1 / |r|^2 and attract as 1 / |r|)
         Qm = np.maximum(Qm, FILM_Q_MIN * row_moment(sp, R, kcode))
-        tau = np.where(ok, gamma / Qm, 0.0)
+        # a lone ring (no fluid row within R) of area A >= R^2 (near the axis, A = M / (2 pi
+        # r rho)) has Q = 0 and a floor of 0: no film stress (a D/dx 61 impact went
+        # non-finite from gamma / Q = inf on one at 1.7 t_c)
+        tau = np.where(ok & (Qm > 0.0), gamma / np.where(Qm > 0.0, Qm, 1.0), 0.0)
         S = tau[:, None] * np.column_stack([tang[:, 0] ** 2, tang[:, 0] * tang[:, 1],
                                              tang[:, 1] ** 2])
         mirror_tensor(n, src, mtype, S)
