@@ -436,7 +436,8 @@ class AxisymmetricFluidModule(PhysicsModule):
         self.impulse += dt * float(ctx.particles.f_fluid[:, 1].sum())
         if self.wall_top is not None and self.D0 > 0 and ctx.t + dt >= self._next_spread:
             self.spread.append([ctx.t + dt, self.contact_diameter(ctx.particles),
-                                self.root_diameter(ctx.particles)])
+                                self.root_diameter(ctx.particles),
+                                self.centre_thickness(ctx.particles)])
             self._next_spread = ctx.t + dt + self.spread_every
 
     def _depth(self, s) -> float:
@@ -508,6 +509,16 @@ class AxisymmetricFluidModule(PhysicsModule):
         return 2.0 * lamella_root_radius(ps.x[fl, 0], ps.x[fl, 1], self.wall_top, self.dx,
                                          self.ROOT_THICKNESS_D * self.D0)
 
+    def centre_thickness(self, ps) -> float:
+        """Thickness of the fluid on the wall at the impact axis [m]
+        (:func:`sphfem.fluid.spreading.centre_thickness`: the rings within 2 dx of the
+        axis; 0 when the axis is dry), to compare with the inviscid lamella
+        (:func:`sphfem.fluid.spreading.lamella_thickness_inviscid`)."""
+        from sphfem.fluid.spreading import centre_thickness
+
+        fl = ps.kind == FLUID
+        return centre_thickness(ps.x[fl, 0], ps.x[fl, 1], self.wall_top, self.dx)
+
     def momentum(self, ps) -> float:
         """Axial momentum sum_i M_i v_z,i of the fluid rings [kg m/s]."""
         fl = ps.kind == FLUID
@@ -530,9 +541,9 @@ class AxisymmetricFluidModule(PhysicsModule):
     def diagnostics(self, ctx) -> dict:
         ps, s = ctx.particles, self.solver
         fl = ps.kind == FLUID
-        # (rows of a run resumed from an older checkpoint have no root: nan)
-        sp = (np.array([list(row) + [math.nan] * (3 - len(row)) for row in self.spread])
-              if self.spread else np.zeros((0, 3)))
+        # (rows of a run resumed from an older checkpoint have no root, no centre: nan)
+        sp = (np.array([list(row) + [math.nan] * (4 - len(row)) for row in self.spread])
+              if self.spread else np.zeros((0, 4)))
         # thin the history to ~400 rows for summary.json
         keep = sp[:: max(1, len(sp) // 400)] if len(sp) else sp
         d = {"geometry": "axisymmetric", "fluid_rings": int(fl.sum()),
@@ -578,7 +589,9 @@ class AxisymmetricFluidModule(PhysicsModule):
                 "history_t_s": keep[:, 0].tolist(),
                 "history_ratio": (keep[:, 1] / self.D0).tolist(),
                 # the lamella's root (Wagner's turnover point), R0 / 10 thickness threshold
-                "history_root_ratio": (keep[:, 2] / self.D0).tolist()}
+                "history_root_ratio": (keep[:, 2] / self.D0).tolist(),
+                # the fluid's thickness on the wall at the axis (0: dry there)
+                "history_centre_thickness_m": keep[:, 3].tolist()}
         return d
 
 

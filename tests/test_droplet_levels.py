@@ -35,7 +35,7 @@ def manufactured(levels, speed, C, p=1.0):
                  T_impact_dev=0.02, wagner_ratio=1.02, correlations=(3.09, 3.54), We=139.0,
                  Re=3333.0, lamella_particles=5.0, film_particles=3.9, vm_thermal=5.08e7,
                  vm_t_tc=2.0, vm_r_m=0.0, vm_z_m=0.0, heat_ideal=7e-5, T_impact_static=0.2,
-                 strain_tc=1.0)
+                 strain_tc=1.0, lamella_ratio=1.04)
         figs.append(f)
     return figs
 
@@ -105,13 +105,15 @@ def test_convergence_script_reads_levels_from_an_earlier_json(tmp_path, capsys):
                    "--t-end-tc", "4", "--figures-from", str(src)])
 
 
-def _summary(V=10.0, D=1e-4, dx=1e-4 / 90, t_contact=1e-7, root=1.0, tip=1.2):
-    """A summary.json of a run whose lamella root follows root x Wagner's sqrt(6 t / t_c)
-    and whose contact diameter tip x Wagner, counted from the surfaces' touching."""
+def _summary(V=10.0, D=1e-4, dx=1e-4 / 90, t_contact=1e-7, root=1.0, tip=1.2, lamella=1.0):
+    """A summary.json of a run whose lamella root follows root x Wagner's sqrt(6 t / t_c),
+    whose contact diameter tip x Wagner and whose thickness at the axis lamella x the
+    inviscid 0.39 D / (tau + 0.25)^2, counted from the surfaces' touching."""
     tc = D / V
     t_touch = t_contact + 2.0 * dx / V  # support 3 dx: the surfaces meet 2 dx later
-    ts = [t_touch + k * 0.02 * tc for k in range(1, 40)]
+    ts = [t_touch + k * 0.02 * tc for k in range(1, 60)]
     w = [math.sqrt(6.0 * (t - t_touch) / tc) for t in ts]
+    h0 = [lamella * 0.39 * D / ((t - t_touch) / tc + 0.25) ** 2 for t in ts]
     water = {"rho0": 1000.0, "mu": 3e-4, "sigma": 0.072, "k": 0.6, "c": 4000.0}
     alumina = {"rho0": 3950.0, "k": 10.0, "c": 900.0, "E": 3e11, "nu": 0.21, "alpha": 8.1e-6}
     return {
@@ -125,7 +127,8 @@ def _summary(V=10.0, D=1e-4, dx=1e-4 / 90, t_contact=1e-7, root=1.0, tip=1.2):
                       "spreading": {"max_ratio": 4.0, "max_t_s": 2.5 * tc,
                                     "history_t_s": ts,
                                     "history_ratio": [tip * x for x in w],
-                                    "history_root_ratio": [root * x for x in w]}},
+                                    "history_root_ratio": [root * x for x in w],
+                                    "history_centre_thickness_m": h0}},
             "coupling": {
                 "t_contact_s": t_contact, "peak_von_mises_Pa": 6e7,
                 "peak_von_mises_t_after_contact_s": tc,
@@ -161,3 +164,24 @@ def test_figures_compare_the_lamella_root_with_wagner_from_the_touching():
 
 def _figs_root(ratio):
     return di.figures(_summary(root=ratio), 10.0, 1e-4)
+
+
+def test_lamella_at_the_axis_is_compared_with_the_inviscid_law():
+    """The lamella's thickness at the axis over [0.5, 1.0] t_c after the touching, against
+    Roisman et al.'s 0.39 D / (tau + 0.25)^2; the criterion fails at 15 % off, and a run
+    without the history (an older summary) gets nan and fails."""
+    f = di.figures(_summary(lamella=1.0), 10.0, 1e-4)
+    assert f["lamella_ratio"] == pytest.approx(1.0, rel=1e-12)
+    crit, notes = di.speed_criteria(10.0, (64, 90, 128), [f, f, f])
+    assert crit["10 m/s lamella"].passed
+    assert any("lamella at the axis / inviscid law: 1.000" in n for n in notes), notes
+    g = di.figures(_summary(lamella=1.15), 10.0, 1e-4)
+    assert g["lamella_ratio"] == pytest.approx(1.15, rel=1e-12)
+    crit, _ = di.speed_criteria(10.0, (64, 90, 128), [f, f, g])
+    assert not crit["10 m/s lamella"].passed
+    old = _summary()
+    del old["diagnostics"]["fluid"]["spreading"]["history_centre_thickness_m"]
+    h = di.figures(old, 10.0, 1e-4)
+    assert math.isnan(h["lamella_ratio"])
+    crit, _ = di.speed_criteria(10.0, (64, 90, 128), [f, f, h])
+    assert not crit["10 m/s lamella"].passed

@@ -266,3 +266,34 @@ def test_lamella_root_edge_cases():
     assert sp.lamella_root_radius(r, np.full(50, 5 * dx), 0.0, dx, 0.1) == 0.0
     with pytest.raises(ValueError, match="shape"):
         sp.lamella_root_radius([0.0, 1.0], [0.0], 0.0, dx, 1.0)
+
+
+def test_lamella_thickness_inviscid_by_hand():
+    # 0.39 D / (tau + 0.25)^2: tau = 0.75 -> 0.39 D; tau = 1.75 -> 0.39 D / 4
+    assert sp.lamella_thickness_inviscid(0.75, 1e-4) == pytest.approx(0.39e-4, rel=1e-14)
+    np.testing.assert_allclose(sp.lamella_thickness_inviscid([0.75, 1.75], 2.0),
+                               [0.78, 0.195], rtol=1e-14)
+    with pytest.raises(ValueError, match="D must be > 0"):
+        sp.lamella_thickness_inviscid(1.0, 0.0)
+
+
+@pytest.mark.parametrize("rows", [1, 3, 7])
+def test_centre_thickness_of_a_film_on_a_lattice(rows):
+    """k rows of rings on the wall (surface at z = 0.3, first row dx / 2 above it) read k
+    dx at the axis, wherever the film ends radially; drops thrown above a gap are not
+    counted; a dry axis reads 0."""
+    dx, wall = 0.1, 0.3
+    r, z = np.meshgrid((np.arange(40) + 0.5) * dx, wall + (np.arange(rows) + 0.5) * dx)
+    r, z = r.ravel(), z.ravel()
+    assert sp.centre_thickness(r, z, wall, dx) == pytest.approx(rows * dx, rel=1e-12)
+    # a drop 3 dx above the film's top (gap > 2.5 dx) is not film
+    r2 = np.r_[r, 0.5 * dx]
+    z2 = np.r_[z, z.max() + 3.0 * dx]
+    assert sp.centre_thickness(r2, z2, wall, dx) == pytest.approx(rows * dx, rel=1e-12)
+    # a hole at the axis: nothing within 2 dx
+    far = r > 2.0 * dx
+    assert sp.centre_thickness(r[far], z[far], wall, dx) == 0.0
+    # fluid at the axis but lifted off the wall (lowest point 2 dx up): dry
+    assert sp.centre_thickness(r, z + 2.0 * dx, wall, dx) == 0.0
+    with pytest.raises(ValueError, match="differ in shape"):
+        sp.centre_thickness(r, z[:-1], wall, dx)

@@ -50,3 +50,25 @@ def test_bad_numbers_are_refused(study, tmp_path, capsys):
     with pytest.raises(SystemExit):
         study.main(["--out", str(tmp_path), "--re", "ten"])
     assert "--we / --re" in capsys.readouterr().err
+
+
+def test_overrides_reach_the_scene_and_name_the_files(study):
+    sets = ["fluid.film_tension=True", "output.every=0.25 tc"]
+    d = study.scene_for(30.0, 1000.0, 24, 2.0, sets)
+    assert d["fluid"]["film_tension"] is True
+    assert d["output"]["every"] == "0.25 tc"  # applied after the sweep's own output rate
+    assert parse_scene(d).fluid.film_tension is True
+    assert study.override_tag(sets) == "film_tension-True_every-0.25-tc"
+    assert study.override_tag([]) == ""
+
+
+def test_bad_levels_and_sets_are_refused(study, tmp_path, capsys):
+    with pytest.raises(SystemExit):
+        study.main(["--out", str(tmp_path), "--n", "61,x"])
+    assert "--n" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        study.main(["--out", str(tmp_path), "--n", "2"])
+    assert "at least 4" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        study.main(["--out", str(tmp_path), "--set", "film_tension"])
+    assert "SECTION.KEY=VALUE" in capsys.readouterr().err

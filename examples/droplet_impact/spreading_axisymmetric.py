@@ -3,6 +3,8 @@
     python examples/droplet_impact/spreading_axisymmetric.py --out DIR
     python examples/droplet_impact/spreading_axisymmetric.py --out DIR --re 100,300 --we 30
     python examples/droplet_impact/spreading_axisymmetric.py --out DIR --refine --report FOLDER
+    python examples/droplet_impact/spreading_axisymmetric.py --out DIR --we 30 --re 1000 \
+        --n 61,87,123 --set fluid.film_tension=True --report FOLDER
 
 A droplet (D = 0.1 mm, rho = 1000 kg/m^3, V = 10 m/s: the packaged axisymmetric scene of
 :mod:`sphfem.validation.droplet_impact`, fluid only) hits the flat wall; each case sets the
@@ -12,8 +14,12 @@ three particles across the residual film of the spreading, h_res = 0.79 D Re^-0.
 2009; :func:`sphfem.fluid.spreading.residual_film`), the rule under which the droplet
 study's figures settle (D/dx >= 3.8 Re^0.4: 24 at Re = 100, 61 at Re = 1000), and never
 fewer than ``--min-n`` particles across the droplet; ``--refine`` adds a level sqrt(2)
-finer per case.  Each run goes to ``--t-end`` t_c (4: past the maximum spreading at these
-We) and reports D_max / D (the contact diameter's maximum,
+finer per case; ``--n`` names the levels instead (a convergence study of one case), and
+``--set section.key=value`` (repeatable) changes the scene as
+:func:`sphfem.validation.droplet_impact.scene_at`'s overrides do (the runs' file names
+then carry the tag ``--tag``, default one made of the overrides).  Each run goes to
+``--t-end`` t_c (4: past the maximum spreading at these We) and reports D_max / D (the
+contact diameter's maximum,
 :meth:`sphfem.axisymmetric_scene.AxisymmetricFluidModule.contact_diameter`) beside the
 correlations at the same (We, Re) and a 90 degree contact angle
 (:func:`sphfem.fluid.spreading.correlation_table`: Pasandideh-Fard et al. 1996, Ukiwe &
@@ -45,8 +51,10 @@ def particles_across(Re: float, min_n: int, refine: bool = False) -> int:
     return math.ceil(n * math.sqrt(2.0)) if refine else n
 
 
-def scene_for(We: float, Re: float, n: int, t_end_tc: float) -> dict:
-    """The fluid-only axisymmetric droplet scene at (We, Re) with n particles across."""
+def scene_for(We: float, Re: float, n: int, t_end_tc: float, overrides=()) -> dict:
+    """The fluid-only axisymmetric droplet scene at (We, Re) with n particles across;
+    ``overrides``: ``"section.key=value"`` strings applied last
+    (:func:`sphfem.validation.droplet_impact.scene_at`)."""
     from sphfem.validation import droplet_impact as di
 
     d = di.scene_at(SPEED, n, t_end_tc)
@@ -61,22 +69,36 @@ def scene_for(We: float, Re: float, n: int, t_end_tc: float) -> dict:
     d["output"]["every"] = f"{t_end_tc / 4} tc"
     d["scene"]["name"] = f"spreading_We{We:g}_Re{Re:g}_n{n}"
     d["scene"]["description"] = f"fluid-only droplet impact at We = {We:g}, Re = {Re:g}"
-    return d
+    return di.apply_overrides(d, overrides)
+
+
+def override_tag(overrides) -> str:
+    """A file-name tag for the overrides ("" for none): ``fluid.film_tension=True`` ->
+    ``film_tension-True``."""
+    parts = []
+    for kv in overrides:
+        key, _, value = kv.partition("=")
+        parts.append(key.split(".")[-1] + "-" + value)
+    return "_".join("".join(c if c.isalnum() or c in "-._" else "-" for c in p)
+                    for p in parts)
 
 
 def run_case(We: float, Re: float, n: int, t_end_tc: float, out: Path,
-             refined: bool = False) -> dict:
-    """One case's record (read back if its JSON exists); ``refined``: the sqrt(2) level."""
+             refined: bool = False, overrides=(), tag: str | None = None) -> dict:
+    """One case's record (read back if its JSON exists); ``refined``: the sqrt(2) level;
+    ``overrides``: scene changes (:func:`scene_for`), ``tag`` the file names' suffix
+    (default :func:`override_tag`)."""
     from sphfem.api import run
     from sphfem.fluid.spreading import correlation_table
     from sphfem.scene import parse_scene
 
-    path = out / f"We{We:g}_Re{Re:g}_n{n}.json"
+    tag = override_tag(overrides) if tag is None else tag
+    path = out / (f"We{We:g}_Re{Re:g}_n{n}" + (f"_{tag}" if tag else "") + ".json")
     if path.exists():
         return json.loads(path.read_text())
     folder = out / path.stem
     t0 = time.perf_counter()
-    scene = parse_scene(scene_for(We, Re, n, t_end_tc), source=path.stem)
+    scene = parse_scene(scene_for(We, Re, n, t_end_tc, overrides), source=path.stem)
     run(scene, folder, overwrite=True)
     s = json.loads((folder / "summary.json").read_text())
     sp = s["diagnostics"]["fluid"]["spreading"]
@@ -88,7 +110,8 @@ def run_case(We: float, Re: float, n: int, t_end_tc: float, out: Path,
            "max_reached": sp["max_t_s"] < 0.98 * s["t"],
            "film_particles": s["diagnostics"]["fluid"].get("residual_film", {}).get(
                "particles_across"),
-           "correlations": band, "wall_s": time.perf_counter() - t0}
+           "correlations": band, "overrides": list(overrides), "tag": tag,
+           "wall_s": time.perf_counter() - t0}
     from sphfem.output import atomic_write_text
 
     atomic_write_text(path, json.dumps(rec, indent=2))
@@ -157,6 +180,10 @@ def main(argv=None) -> int:
     p.add_argument("--min-n", type=int, default=24, help="fewest particles across D")
     p.add_argument("--t-end", type=float, default=4.0, help="end time [t_c]")
     p.add_argument("--refine", action="store_true", help="also run sqrt(2) finer")
+    p.add_argument("--n", help="particles across D, comma separated (instead of the rule)")
+    p.add_argument("--set", action="append", default=[], metavar="SECTION.KEY=VALUE",
+                   help="scene change (repeatable), e.g. fluid.film_tension=True")
+    p.add_argument("--tag", help="file-name suffix of these runs (default: from --set)")
     p.add_argument("--report", type=Path, help="write results.json, table.md, spreading.png")
     a = p.parse_args(argv)
     try:
@@ -166,13 +193,26 @@ def main(argv=None) -> int:
         p.error(f"--we / --re: {e}")
     if any(x <= 0 for x in wes + res):
         p.error("--we / --re: must be positive")
+    try:
+        ns = [int(x) for x in a.n.split(",")] if a.n else None
+    except ValueError as e:
+        p.error(f"--n: {e}")
+    if ns is not None and any(n < 4 for n in ns):
+        p.error("--n: at least 4 particles across the droplet")
+    bad = [kv for kv in a.set if "=" not in kv or "." not in kv.partition("=")[0]]
+    if bad:
+        p.error(f"--set: expected SECTION.KEY=VALUE, got {bad[0]!r}")
     a.out.mkdir(parents=True, exist_ok=True)
     records = []
     for Re in res:
         for We in wes:
-            for refine in ((False, True) if a.refine else (False,)):
-                n = particles_across(Re, a.min_n, refine)
-                r = run_case(We, Re, n, a.t_end, a.out, refine)
+            if ns is not None:
+                levels = [(n, k > 0) for k, n in enumerate(ns)]
+            else:
+                levels = [(particles_across(Re, a.min_n, refine), refine)
+                          for refine in ((False, True) if a.refine else (False,))]
+            for n, refine in levels:
+                r = run_case(We, Re, n, a.t_end, a.out, refine, a.set, a.tag)
                 print(f"We {We:g} Re {Re:g} D/dx {n}: D_max/D {r['spread']:.3f} at "
                       f"{r['spread_t_tc']:.2f} t_c ({r['wall_s']:.0f} s)", flush=True)
                 records.append(r)

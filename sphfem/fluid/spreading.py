@@ -115,6 +115,50 @@ def residual_film(D: float, Re: float) -> float:
     return RESIDUAL_FILM * D * Re ** -0.4
 
 
+#: the inviscid lamella at the impact axis, h(0, t) = ETA D / (tau + TAU0)^2 (Roisman,
+#: Berberovic & Tropea 2009): the constants fitted to their simulations of a drop on a wall
+LAMELLA_ETA = 0.39
+LAMELLA_TAU0 = 0.25
+
+
+def lamella_thickness_inviscid(tau, D: float, eta: float = LAMELLA_ETA,
+                               tau0: float = LAMELLA_TAU0):
+    """Thickness [m] of the lamella at the impact axis in the inviscid, inertia-dominated
+    stage, h(0, t) = eta D / (tau + tau0)^2, tau = t V / D counted from the moment the
+    droplet touches the wall (Roisman, Berberovic & Tropea 2009, Phys. Fluids 21, 052103:
+    the lamella's flow is the self-similar stretching u_r = r / (t + t0), so its thickness
+    falls as 1 / (t + t0)^2; eta = 0.39 and tau0 = 0.25 fitted to their numerical
+    simulations).  Independent of We and Re while the viscous boundary layer is thinner
+    than the lamella: it holds from about tau = 0.5 until the lamella nears the residual
+    film (:func:`residual_film`), where viscosity freezes it (the thickness then stays
+    above this law)."""
+    tau = np.asarray(tau, float)
+    if not D > 0:
+        raise ValueError(f"lamella_thickness_inviscid: D must be > 0, got {D!r}")
+    return eta * D / (tau + tau0) ** 2
+
+
+def centre_thickness(r, z, wall_level: float, dx: float, *, radius: float = 2.0,
+                     gap: float = 2.5) -> float:
+    """Thickness [m] of the wall-attached fluid at the impact axis: the fluid points
+    (``r`` from the axis, ``z`` along the wall normal) within ``radius`` dx of the axis,
+    climbed from the lowest (which must lie within 1.5 dx of ``wall_level``, the wall's
+    surface) without a vertical gap wider than ``gap`` dx; the height of the topmost one
+    above the wall plus dx / 2 (each point stands for a cell dx tall), so k rows on the
+    wall read k dx.  0 when the axis is dry (no point there, or none on the wall): a
+    hole.  Fluid thrown above a gap (drops over the film) is not counted."""
+    r = np.asarray(r, float)
+    z = np.asarray(z, float) - wall_level
+    if r.shape != z.shape:
+        raise ValueError(f"r and z differ in shape: {r.shape} vs {z.shape}")
+    zz = np.sort(z[np.abs(r) < radius * dx])
+    if not len(zz) or zz[0] > 1.5 * dx:
+        return 0.0
+    jumps = np.flatnonzero(np.diff(zz) > gap * dx)
+    top = zz[jumps[0]] if jumps.size else zz[-1]
+    return float(top + 0.5 * dx)
+
+
 # --------------------------------------------------------------------------------------
 # correlations
 

@@ -42,7 +42,11 @@ Each figure gets an observed order, a Richardson limit and a GCI error bar
   surfaces touch within 10 % (the root: :func:`sphfem.fluid.spreading.lamella_root_radius`,
   where the wall-attached fluid becomes thinner than R0 / 10; the contact diameter is the
   tip of the sheet ejected ahead of the root, 1.12-1.27 x Wagner at D/dx 64-181 at 10 m/s,
-  reported); (b) D_max / D inside the
+  reported); (b) the lamella's thickness at the axis against the inviscid law h(0, t) =
+  0.39 D / (tau + 0.25)^2 (Roisman, Berberovic & Tropea 2009; tau in t_c from the
+  touching; :func:`sphfem.fluid.spreading.lamella_thickness_inviscid`), its mean ratio
+  over [0.5, 1.0] t_c within 10 % (before that the body is still turning into the
+  lamella, after it the viscous layer holds the film above the law); (c) D_max / D inside the
   band of the published correlations (:func:`sphfem.fluid.spreading.correlation_table` at
   the run's We and Re, contact angle 90 deg: Pasandideh-Fard 1996, Ukiwe & Kwok 2005, Clanet
   2004, Roisman 2009, Laan 2014) widened by 10 % on each side (their own scatter).  The
@@ -92,6 +96,11 @@ T_WINDOW = (0.1, 2.0)
 #: window of the early contact diameter against Wagner's law, in t_c after contact
 T_WAGNER = (0.1, 0.3)
 TOL_WAGNER = 0.10
+#: window of the lamella's thickness at the axis against the inviscid law, t_c after the
+#: surfaces touch (after the droplet's body has turned into the lamella, before viscosity
+#: holds it: module docstring)
+T_LAMELLA = (0.5, 1.0)
+TOL_LAMELLA = 0.10
 #: the correlations' band is widened by this fraction on each side
 TOL_CORRELATIONS = 0.10
 TOL_CONVERGED = 0.10
@@ -163,6 +172,12 @@ def scene_at(speed: float, per_diameter: int, t_end_tc: float, *,
     if wall_radius is not None:
         d["domain"]["hi"][0] = wall["hi"][0] = wall_radius
         d["coupling"]["heat"]["lateral"] = [[0.0, wall_radius]]
+    return apply_overrides(d, overrides)
+
+
+def apply_overrides(d: dict, overrides) -> dict:
+    """Set ``"section.key=value"`` strings (the value a Python literal, else the text) in
+    the scene dict ``d``, in order; returns ``d``."""
     for kv in overrides:
         key, _, text = kv.partition("=")
         try:
@@ -208,6 +223,13 @@ def figures(summary: dict, speed: float, diameter: float) -> dict:
               if T_WAGNER[0] <= (t - t_touch) / tc <= T_WAGNER[1]]
         return sum(rs) / len(rs) if rs else math.nan
 
+    from sphfem.fluid.spreading import lamella_thickness_inviscid
+
+    # the lamella at the axis against the inviscid h = 0.39 D / (tau + 0.25)^2
+    lam = [h / float(lamella_thickness_inviscid((t - t_touch) / tc, diameter))
+           for t, h in zip(hist_t, sp.get("history_centre_thickness_m")
+                           or [math.nan] * len(hist_t), strict=True)
+           if T_LAMELLA[0] <= (t - t_touch) / tc <= T_LAMELLA[1]]
     fmat = summary["scene"]["materials"][fluid["material"]]
     from sphfem.fluid.spreading import correlation_table, reynolds, weber
 
@@ -226,6 +248,7 @@ def figures(summary: dict, speed: float, diameter: float) -> dict:
         "spread": sp["max_ratio"], "spread_t_tc": sp["max_t_s"] / tc,
         "wagner_ratio": wagner_mean("history_root_ratio"),
         "wagner_tip_ratio": wagner_mean("history_ratio"),
+        "lamella_ratio": sum(lam) / len(lam) if lam else math.nan,
         "correlations": (min(band), max(band)), "We": We, "Re": Re,
         "lamella_particles": 2.0 * diameter / (3.0 * sp["max_ratio"] ** 2 * dx),
         "film_particles": fl.get("residual_film", {}).get("particles_across", math.nan),
@@ -359,6 +382,11 @@ def speed_criteria(speed: float, levels, figs: list[dict], quick: bool = False):
             f"{tag}, D/dx={levels[-1]}: |mean lamella-root diameter / Wagner's sqrt(6 t / "
             f"t_c) - 1| over [{T_WAGNER[0]}, {T_WAGNER[1]}] t_c after the surfaces touch",
             abs(fin["wagner_ratio"] - 1.0), TOL_WAGNER)
+        crit[f"{tag} lamella"] = Criterion(
+            f"{tag}, D/dx={levels[-1]}: |mean lamella thickness at the axis / the inviscid "
+            f"0.39 D / (tau + 0.25)^2 - 1| over [{T_LAMELLA[0]}, {T_LAMELLA[1]}] t_c after "
+            "the surfaces touch (Roisman, Berberovic & Tropea 2009)",
+            abs(fin["lamella_ratio"] - 1.0), TOL_LAMELLA)
         lo, hi = fin["correlations"]
         crit[f"{tag} correlations"] = Criterion(
             f"{tag}, D/dx={levels[-1]}: distance of D_max/D = {fin['spread']:.2f} outside "
@@ -373,6 +401,9 @@ def speed_criteria(speed: float, levels, figs: list[dict], quick: bool = False):
                  + ", ".join(f"{f['wagner_ratio']:.3f}" for f in figs)
                  + "; contact diameter (the sheet's tip) / Wagner: "
                  + ", ".join(f"{f.get('wagner_tip_ratio', math.nan):.3f}" for f in figs)
+                 + f"; over [{T_LAMELLA[0]}, {T_LAMELLA[1]}] t_c, lamella at the axis / "
+                 "inviscid law: "
+                 + ", ".join(f"{f.get('lamella_ratio', math.nan):.3f}" for f in figs)
                  + f" at D/dx = {list(levels)}")
     notes.append(f"{tag}: peak von Mises at D/dx={levels[-1]}: {fin['vm_peak'] / 1e6:.2f} "
                  f"MPa at {fin['vm_t_tc']:.2f} t_c after contact, r = "
