@@ -435,9 +435,9 @@ class AxisymmetricFluidModule(PhysicsModule):
                                "rings_outside_domain)", ctx.t + dt)
         self.impulse += dt * float(ctx.particles.f_fluid[:, 1].sum())
         if self.wall_top is not None and self.D0 > 0 and ctx.t + dt >= self._next_spread:
-            self.spread.append([ctx.t + dt, self.contact_diameter(ctx.particles),
-                                self.root_diameter(ctx.particles),
-                                self.centre_thickness(ctx.particles)])
+            ps = ctx.particles
+            self.spread.append([ctx.t + dt, self.contact_diameter(ps), self.root_diameter(ps),
+                                self.centre_thickness(ps), *self.body_diameter(ps)])
             self._next_spread = ctx.t + dt + self.spread_every
 
     def _depth(self, s) -> float:
@@ -509,6 +509,17 @@ class AxisymmetricFluidModule(PhysicsModule):
         return 2.0 * lamella_root_radius(ps.x[fl, 0], ps.x[fl, 1], self.wall_top, self.dx,
                                          self.ROOT_THICKNESS_D * self.D0)
 
+    def body_diameter(self, ps) -> tuple[float, float]:
+        """The fluid's main body's wetted diameter [m] and the mass fraction broken off
+        from it (:func:`sphfem.fluid.spreading.body_contact_diameter`): the spreading
+        figure, which shed rings and stray rings on the wall ahead of the rim do not
+        move."""
+        from sphfem.fluid.spreading import body_contact_diameter
+
+        fl = ps.kind == FLUID
+        return body_contact_diameter(ps.x[fl, 0], ps.x[fl, 1], self.wall_top, self.dx,
+                                     ps.m[fl])
+
     def centre_thickness(self, ps) -> float:
         """Thickness of the fluid on the wall at the impact axis [m]
         (:func:`sphfem.fluid.spreading.centre_thickness`: the rings within 2 dx of the
@@ -541,9 +552,9 @@ class AxisymmetricFluidModule(PhysicsModule):
     def diagnostics(self, ctx) -> dict:
         ps, s = ctx.particles, self.solver
         fl = ps.kind == FLUID
-        # (rows of a run resumed from an older checkpoint have no root, no centre: nan)
-        sp = (np.array([list(row) + [math.nan] * (4 - len(row)) for row in self.spread])
-              if self.spread else np.zeros((0, 4)))
+        # (rows of a run resumed from an older checkpoint lack the later columns: nan)
+        sp = (np.array([list(row) + [math.nan] * (6 - len(row)) for row in self.spread])
+              if self.spread else np.zeros((0, 6)))
         # thin the history to ~400 rows for summary.json
         keep = sp[:: max(1, len(sp) // 400)] if len(sp) else sp
         d = {"geometry": "axisymmetric", "fluid_rings": int(fl.sum()),
@@ -578,16 +589,35 @@ class AxisymmetricFluidModule(PhysicsModule):
         if self.film is not None:
             d["residual_film"] = self.film
         if self.D0 > 0 and len(sp):
-            k = int(np.argmax(sp[:, 1]))
+            from sphfem.fluid.spreading import BODY_LINK
+
+            # the main body's diameter (column 4); the wall row's (column 1) where a run
+            # resumed from an older checkpoint has none
+            col = 4 if np.isfinite(sp[:, 4]).any() else 1
+            k = int(np.nanargmax(sp[:, col]))
+            kw = int(np.argmax(sp[:, 1]))
             d["spreading"] = {
-                "D0_m": self.D0, "definition": "2 r_e + dx, r_e the outermost ring within "
-                "1.5 dx of the wall reached from the axis without a gap over "
-                f"{self.FILM_GAP_DX:g} dx", "max_diameter_m": float(sp[k, 1]),
-                "max_ratio": float(sp[k, 1] / self.D0), "max_t_s": float(sp[k, 0]),
+                "D0_m": self.D0, "definition": (
+                    "2 r_e + dx, r_e the outermost ring within 1.5 dx of the wall of the "
+                    f"fluid's main body (rings joined by links < {BODY_LINK:g} dx, the "
+                    "heaviest group)" if col == 4 else
+                    "2 r_e + dx, r_e the outermost ring within 1.5 dx of the wall reached "
+                    f"from the axis without a gap over {self.FILM_GAP_DX:g} dx"),
+                "max_diameter_m": float(sp[k, col]),
+                "max_ratio": float(sp[k, col] / self.D0), "max_t_s": float(sp[k, 0]),
                 # the film reached the end of the wall: the spreading is cut by the scene
-                "wall_end_reached": bool(0.5 * sp[k, 1] >= self._wall_r_max - ctx.R),
+                "wall_end_reached": bool(0.5 * sp[k, col] >= self._wall_r_max - ctx.R),
+                # the wall row reached from the axis with gaps < FILM_GAP_DX dx (before
+                # session 16 the figure): stray rings on the wall ahead of the rim count
+                "max_ratio_wall_row": float(sp[kw, 1] / self.D0),
+                "max_t_wall_row_s": float(sp[kw, 0]),
+                "detached_mass_fraction_max": (float(np.nanmax(sp[:, 5]))
+                                               if np.isfinite(sp[:, 5]).any() else None),
+                "detached_mass_fraction_at_max": float(sp[k, 5]),
                 "history_t_s": keep[:, 0].tolist(),
-                "history_ratio": (keep[:, 1] / self.D0).tolist(),
+                "history_ratio": (keep[:, col] / self.D0).tolist(),
+                "history_wall_row_ratio": (keep[:, 1] / self.D0).tolist(),
+                "history_detached_mass_fraction": keep[:, 5].tolist(),
                 # the lamella's root (Wagner's turnover point), R0 / 10 thickness threshold
                 "history_root_ratio": (keep[:, 2] / self.D0).tolist(),
                 # the fluid's thickness on the wall at the axis (0: dry there)

@@ -297,3 +297,43 @@ def test_centre_thickness_of_a_film_on_a_lattice(rows):
     assert sp.centre_thickness(r, z + 2.0 * dx, wall, dx) == 0.0
     with pytest.raises(ValueError, match="differ in shape"):
         sp.centre_thickness(r, z[:-1], wall, dx)
+
+
+def test_main_body_is_the_heaviest_connected_group():
+    # two groups: 10 light points in a row, 3 heavy points far away
+    a = np.c_[np.arange(10.0), np.zeros(10)]
+    b = np.c_[100.0 + np.arange(3.0), np.zeros(3)]
+    x = np.r_[a, b]
+    assert sp.main_body(x, 1.5).sum() == 10  # by count
+    heavy = np.r_[np.ones(10), 10.0 * np.ones(3)]
+    body = sp.main_body(x, 1.5, heavy)
+    assert body.sum() == 3 and body[10:].all()
+    assert sp.main_body(np.zeros((0, 2)), 1.0).shape == (0,)
+    with pytest.raises(ValueError, match="weights"):
+        sp.main_body(x, 1.5, np.ones(3))
+
+
+def test_body_contact_diameter_leaves_out_shed_and_stray_rings():
+    """A lamella 3 rows thick out to r = 40 dx; stray rings on the wall ahead of it, 1.9 dx
+    apart along r but alternating in height (2.1-2.7 dx apart: not joined by 2 dx links),
+    which the wall-row measure (gaps < 2 dx along r) counts; a shed drop above the wall.
+    The body's diameter is the lamella's, the detached fraction the strays' and drop's
+    ring-mass share."""
+    dx, wall = 1.0, 0.0
+    r, z = np.meshgrid((np.arange(40) + 0.5) * dx, (np.arange(3) + 0.5) * dx)
+    r, z = r.ravel(), z.ravel()
+    rs = r.max() + 1.9 * dx * np.arange(1, 6)
+    zs = np.where(np.arange(5) % 2 == 0, -0.45, 1.4) * dx
+    rd, zd = np.array([20.0, 20.5]), np.array([10.0, 10.0])
+    R, Z = np.r_[r, rs, rd], np.r_[z, zs, zd]
+    m = R.copy()  # ring masses grow with r
+    D, frac = sp.body_contact_diameter(R, Z, wall, dx, m)
+    assert D == pytest.approx(2.0 * (r.max() + 0.5 * dx))
+    assert frac == pytest.approx((rs.sum() + rd.sum()) / m.sum())
+    # the wall-row measure runs on to the last stray ring
+    row = np.sort(R[Z < 1.5 * dx])
+    assert row[-1] == pytest.approx(rs[-1]) and np.diff(row).max() < 2.0 * dx
+    # a body that has left the wall
+    D, frac = sp.body_contact_diameter(r, z + 5.0 * dx, wall, dx)
+    assert D == 0.0 and frac == 0.0
+    assert sp.body_contact_diameter([], [], wall, dx) == (0.0, 0.0)

@@ -107,6 +107,10 @@ def run_case(We: float, Re: float, n: int, t_end_tc: float, out: Path,
     band = correlation_table(We, Re, 90.0)
     rec = {"We": We, "Re": Re, "n": n, "refined": refined, "spread": sp["max_ratio"],
            "spread_t_tc": sp["max_t_s"] / tc, "t_end_tc": s["t"] / tc,
+           # the wall row's measure (stray rings ahead of the rim count) and the mass
+           # broken off the main body when the maximum is reached
+           "spread_wall_row": sp.get("max_ratio_wall_row"),
+           "detached_at_max": sp.get("detached_mass_fraction_at_max"),
            "max_reached": sp["max_t_s"] < 0.98 * s["t"],
            "film_particles": s["diagnostics"]["fluid"].get("residual_film", {}).get(
                "particles_across"),

@@ -291,6 +291,57 @@ def _largest_cluster(lateral, link):
     return lateral[labels == np.bincount(labels).argmax()]
 
 
+def main_body(x, link: float, weights=None):
+    """Mask of the main body of a fluid: the connected group of points (joined by links
+    shorter than ``link``, in the units of ``x``) with the largest total weight (``weights``,
+    e.g. the particles' or rings' masses; default 1 each).  What lies outside it has broken
+    off: drops, spray, shed rings."""
+    from scipy.sparse import coo_matrix
+    from scipy.sparse.csgraph import connected_components
+    from scipy.spatial import cKDTree
+
+    x = np.asarray(x, float)
+    n = len(x)
+    if n == 0:
+        return np.zeros(0, bool)
+    w = np.ones(n) if weights is None else np.asarray(weights, float)
+    if w.shape != (n,):
+        raise ValueError(f"weights: expected shape ({n},), got {w.shape}")
+    pairs = cKDTree(x).query_pairs(link, output_type="ndarray")
+    g = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
+    _, labels = connected_components(g, directed=False)
+    return labels == np.argmax(np.bincount(labels, weights=w))
+
+
+#: particles within this many spacings of each other belong to one body (main_body)
+BODY_LINK = 2.0
+
+
+def body_contact_diameter(r, z, wall_level: float, dx: float, mass=None, *,
+                          link: float = BODY_LINK) -> tuple[float, float]:
+    """The main body's wetted diameter [m] and the mass fraction broken off from it, of an
+    axisymmetric fluid (``r`` from the impact axis, ``z`` along the wall normal, ``mass``
+    the rings' masses): the body is :func:`main_body` with links of ``link`` dx; its
+    diameter is 2 (r_e + dx / 2), r_e its outermost ring within 1.5 dx above
+    ``wall_level`` (the wall's surface); (0, fraction) when the body does not touch the
+    wall.  This is the maximum-spreading measure of experiments (the lamella's own rim,
+    not satellite drops): rings shed from the rim and stray rings that slide out on the
+    wall ahead of it do not count, whatever their spacing along the wall."""
+    r = np.asarray(r, float)
+    z = np.asarray(z, float) - wall_level
+    if r.shape != z.shape:
+        raise ValueError(f"r and z differ in shape: {r.shape} vs {z.shape}")
+    if not len(r):
+        return 0.0, 0.0
+    m = np.ones(len(r)) if mass is None else np.asarray(mass, float)
+    body = main_body(np.c_[r, z], link * dx, m)
+    detached = float(m[~body].sum() / m.sum())
+    wet = body & (z < 1.5 * dx)
+    if not wet.any():
+        return 0.0, detached
+    return float(2.0 * (r[wet].max() + 0.5 * dx)), detached
+
+
 def contact_diameter(x, wall_level: float, dx: float, kind=None, *, axis: int = -1,
                      within: float = 1.0, center=None, link: float | None = None) -> float:
     """Wetted diameter of one frame [m]: 2 (max_i r_i + dx / 2) over the fluid particles i

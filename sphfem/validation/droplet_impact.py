@@ -13,7 +13,9 @@ one or two particles thick and its figures are decided by the spacing.
 ``examples/droplet_impact/convergence.py SPEED --out DIR`` runs one speed resumably.
 For each speed the four figures a user reads are extracted from ``summary.json``:
 
-* ``spread``: the maximum spreading ratio D_max / D (the fluid module's contact diameter);
+* ``spread``: the maximum spreading ratio D_max / D (the wetted diameter of the fluid's main
+  body, :func:`sphfem.fluid.spreading.body_contact_diameter`: shed and stray rings do not
+  count; the mass broken off the body is reported);
 * ``heat``: the heat into the substrate by the end time [J];
 * ``T_impact``: the impact point's surface temperature rise, time-averaged over the window
   [t_contact + 0.1 t_c, t_contact + 2 t_c] [K];
@@ -246,6 +248,8 @@ def figures(summary: dict, speed: float, diameter: float) -> dict:
     return {
         "vm_thermal": vm_thermal,
         "spread": sp["max_ratio"], "spread_t_tc": sp["max_t_s"] / tc,
+        "spread_wall_row": sp.get("max_ratio_wall_row", math.nan),
+        "detached_at_max": sp.get("detached_mass_fraction_at_max", math.nan),
         "wagner_ratio": wagner_mean("history_root_ratio"),
         "wagner_tip_ratio": wagner_mean("history_ratio"),
         "lamella_ratio": sum(lam) / len(lam) if lam else math.nan,
@@ -393,6 +397,13 @@ def speed_criteria(speed: float, levels, figs: list[dict], quick: bool = False):
             f"the correlations' band [{lo:.2f}, {hi:.2f}] (We {fin['We']:.0f}, Re "
             f"{fin['Re']:.0f}), relative to the band's edge",
             max(lo / fin["spread"] - 1.0, fin["spread"] / hi - 1.0, 0.0), TOL_CORRELATIONS)
+    notes.append(f"{tag}: maximum spreading of the main body (D_max/D) "
+                 + ", ".join(f"{f['spread']:.3f}" for f in figs)
+                 + ", mass broken off it then "
+                 + ", ".join(f"{f.get('detached_at_max', math.nan):.1%}" for f in figs)
+                 + "; the wall row's maximum (stray rings ahead of the rim count) "
+                 + ", ".join(f"{f.get('spread_wall_row', math.nan):.3f}" for f in figs)
+                 + f" at D/dx = {list(levels)}")
     notes.append(f"{tag}: lamella at maximum spreading, particles across (2 D / (3 beta^2 "
                  "dx)): " + ", ".join(_one_decimal(f.get('lamella_particles')) for f in figs)
                  + "; residual film 0.79 D Re^-0.4 (Roisman 2009), particles across: "
