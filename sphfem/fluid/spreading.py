@@ -129,9 +129,11 @@ def lamella_thickness_inviscid(tau, D: float, eta: float = LAMELLA_ETA,
     the lamella's flow is the self-similar stretching u_r = r / (t + t0), so its thickness
     falls as 1 / (t + t0)^2; eta = 0.39 and tau0 = 0.25 fitted to their numerical
     simulations).  Independent of We and Re while the viscous boundary layer is thinner
-    than the lamella: it holds from about tau = 0.5 until the lamella nears the residual
-    film (:func:`residual_film`), where viscosity freezes it (the thickness then stays
-    above this law)."""
+    than the lamella: a remote asymptote, approached once the droplet's body has turned
+    into the lamella (in sphfem's axisymmetric runs from tau ~ 0.8: 0.70 / 0.86 / 0.99 of
+    it at tau = 0.45 / 0.6 / 0.76, We 30, Re 1000, D/dx 61), and left as the viscous
+    layer thickens towards the residual film (:func:`residual_film`), which freezes the
+    film above this law."""
     tau = np.asarray(tau, float)
     if not D > 0:
         raise ValueError(f"lamella_thickness_inviscid: D must be > 0, got {D!r}")

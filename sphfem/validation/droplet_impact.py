@@ -47,7 +47,7 @@ Each figure gets an observed order, a Richardson limit and a GCI error bar
   reported); (b) the lamella's thickness at the axis against the inviscid law h(0, t) =
   0.39 D / (tau + 0.25)^2 (Roisman, Berberovic & Tropea 2009; tau in t_c from the
   touching; :func:`sphfem.fluid.spreading.lamella_thickness_inviscid`), its mean ratio
-  over [0.5, 1.0] t_c within 10 % (before that the body is still turning into the
+  over [0.75, 1.25] t_c within 10 % (before that the body is still turning into the
   lamella, after it the viscous layer holds the film above the law); (c) D_max / D inside the
   band of the published correlations (:func:`sphfem.fluid.spreading.correlation_table` at
   the run's We and Re, contact angle 90 deg: Pasandideh-Fard 1996, Ukiwe & Kwok 2005, Clanet
@@ -101,7 +101,7 @@ TOL_WAGNER = 0.10
 #: window of the lamella's thickness at the axis against the inviscid law, t_c after the
 #: surfaces touch (after the droplet's body has turned into the lamella, before viscosity
 #: holds it: module docstring)
-T_LAMELLA = (0.5, 1.0)
+T_LAMELLA = (0.75, 1.25)
 TOL_LAMELLA = 0.10
 #: the correlations' band is widened by this fraction on each side
 TOL_CORRELATIONS = 0.10
