@@ -72,3 +72,26 @@ def test_bad_levels_and_sets_are_refused(study, tmp_path, capsys):
     with pytest.raises(SystemExit):
         study.main(["--out", str(tmp_path), "--set", "film_tension"])
     assert "SECTION.KEY=VALUE" in capsys.readouterr().err
+
+
+def test_ensemble_members_jitter_the_droplet_and_the_report_tabulates_them(study, tmp_path):
+    d0 = study.scene_for(30.0, 1000.0, 24, 2.0)
+    d2 = study.scene_for(30.0, 1000.0, 24, 2.0, member=2)
+    drop0 = next(b for b in d0["blocks"] if b["kind"] == "fluid")
+    drop2 = next(b for b in d2["blocks"] if b["kind"] == "fluid")
+    assert drop0.get("jitter", 0.0) == 0.0
+    assert drop2["jitter"] == study.ENSEMBLE_JITTER and d2["scene"]["seed"] == 2
+    parse_scene(d2)
+    band = {"a": 2.0, "b": 2.5}
+    recs = [{"We": 30.0, "Re": 1000.0, "n": 61, "member": k, "refined": False,
+             "spread": s, "spread_t_tc": 1.5, "max_reached": True, "film_particles": 3.0,
+             "correlations": band, "wall_s": 1.0, "spread_wall_row": s + 0.1,
+             "detached_at_max": 0.02} for k, s in enumerate((2.9, 3.1, 3.0))]
+    recs.append({"We": 30.0, "Re": 1000.0, "n": 87, "refined": True, "spread": 2.7,
+                 "spread_t_tc": 1.4, "max_reached": True, "film_particles": 4.3,
+                 "correlations": band, "wall_s": 2.0})  # an older record: no new keys
+    study.report(recs, tmp_path)
+    table = (tmp_path / "table.md").read_text()
+    assert "| 30 | 1000 | 61 | 3 | 3.000 | 2.900-3.100 | 6.7% |" in table
+    assert "| 30 | 1000 | 87 | 0 | 4.3 | 2.70 (1.40) | - | - |" in table
+    assert (tmp_path / "spreading.png").exists()

@@ -51,13 +51,24 @@ def particles_across(Re: float, min_n: int, refine: bool = False) -> int:
     return math.ceil(n * math.sqrt(2.0)) if refine else n
 
 
-def scene_for(We: float, Re: float, n: int, t_end_tc: float, overrides=()) -> dict:
+#: the ensemble's members k > 0 move every droplet ring by up to this many dx at random
+#: (the block's ``jitter`` with scene seed k): a perturbation far below the spacing
+ENSEMBLE_JITTER = 1e-3
+
+
+def scene_for(We: float, Re: float, n: int, t_end_tc: float, overrides=(),
+              member: int = 0) -> dict:
     """The fluid-only axisymmetric droplet scene at (We, Re) with n particles across;
     ``overrides``: ``"section.key=value"`` strings applied last
-    (:func:`sphfem.validation.droplet_impact.scene_at`)."""
+    (:func:`sphfem.validation.droplet_impact.scene_at`); ``member`` k > 0: the droplet's
+    rings jittered by up to :data:`ENSEMBLE_JITTER` dx with seed k (an ensemble member)."""
     from sphfem.validation import droplet_impact as di
 
     d = di.scene_at(SPEED, n, t_end_tc)
+    if member:
+        drop = next(b for b in d["blocks"] if b["kind"] == "fluid")
+        drop["jitter"] = ENSEMBLE_JITTER
+        d["scene"]["seed"] = int(member)
     drop = next(b for b in d["blocks"] if b["kind"] == "fluid")
     mat = d["materials"][drop["material"]]
     D, rho = 2.0 * drop["radius"], mat["rho0"]
@@ -84,21 +95,24 @@ def override_tag(overrides) -> str:
 
 
 def run_case(We: float, Re: float, n: int, t_end_tc: float, out: Path,
-             refined: bool = False, overrides=(), tag: str | None = None) -> dict:
+             refined: bool = False, overrides=(), tag: str | None = None,
+             member: int = 0) -> dict:
     """One case's record (read back if its JSON exists); ``refined``: the sqrt(2) level;
     ``overrides``: scene changes (:func:`scene_for`), ``tag`` the file names' suffix
-    (default :func:`override_tag`)."""
+    (default :func:`override_tag`); ``member``: the ensemble member (:func:`scene_for`)."""
     from sphfem.api import run
     from sphfem.fluid.spreading import correlation_table
     from sphfem.scene import parse_scene
 
     tag = override_tag(overrides) if tag is None else tag
-    path = out / (f"We{We:g}_Re{Re:g}_n{n}" + (f"_{tag}" if tag else "") + ".json")
+    path = out / (f"We{We:g}_Re{Re:g}_n{n}" + (f"_{tag}" if tag else "")
+                  + (f"_m{member}" if member else "") + ".json")
     if path.exists():
         return json.loads(path.read_text())
     folder = out / path.stem
     t0 = time.perf_counter()
-    scene = parse_scene(scene_for(We, Re, n, t_end_tc, overrides), source=path.stem)
+    scene = parse_scene(scene_for(We, Re, n, t_end_tc, overrides, member),
+                        source=path.stem)
     run(scene, folder, overwrite=True)
     s = json.loads((folder / "summary.json").read_text())
     sp = s["diagnostics"]["fluid"]["spreading"]
@@ -115,11 +129,17 @@ def run_case(We: float, Re: float, n: int, t_end_tc: float, out: Path,
            "film_particles": s["diagnostics"]["fluid"].get("residual_film", {}).get(
                "particles_across"),
            "correlations": band, "overrides": list(overrides), "tag": tag,
+           "member": member,
            "wall_s": time.perf_counter() - t0}
     from sphfem.output import atomic_write_text
 
     atomic_write_text(path, json.dumps(rec, indent=2))
     return rec
+
+
+def _fmt(x, spec: str) -> str:
+    """``x`` formatted with ``spec``, "-" when missing (records of older runs)."""
+    return "-" if x is None else format(x, spec)
 
 
 def report(records: list[dict], folder: Path) -> None:
@@ -133,22 +153,36 @@ def report(records: list[dict], folder: Path) -> None:
     from sphfem.output import atomic_write_text
 
     folder.mkdir(parents=True, exist_ok=True)
-    records = sorted(records, key=lambda r: (r["We"], r["Re"], r["n"]))
+    records = sorted(records, key=lambda r: (r["We"], r["Re"], r["n"], r.get("member", 0)))
     atomic_write_text(folder / "results.json", json.dumps(records, indent=2))
+    groups: dict[tuple, list[float]] = {}
+    for r in records:
+        groups.setdefault((r["We"], r["Re"], r["n"]), []).append(r["spread"])
     names = list(records[0]["correlations"])
-    lines = ["| We | Re | D/dx | film particles | D_max/D (t/t_c) | correlations min-max | "
-             "outside the band | " + " | ".join(names) + " | wall s |",
-             "|" + "---|" * (8 + len(names))]
+    lines = ["| We | Re | D/dx | run | film particles | D_max/D (t/t_c) | wall row | broken "
+             "off | correlations min-max | outside the band | " + " | ".join(names)
+             + " | wall s |", "|" + "---|" * (11 + len(names))]
     for r in records:
         lo, hi = min(r["correlations"].values()), max(r["correlations"].values())
         off = max(lo / r["spread"] - 1.0, r["spread"] / hi - 1.0, 0.0)
         when = f"{r['spread_t_tc']:.2f}" + ("" if r["max_reached"] else ", not reached")
         lines.append(
-            f"| {r['We']:g} | {r['Re']:g} | {r['n']} | {r['film_particles']:.1f} | "
-            f"{r['spread']:.2f} ({when}) | "
+            f"| {r['We']:g} | {r['Re']:g} | {r['n']} | {r.get('member', 0)} | "
+            f"{r['film_particles']:.1f} | {r['spread']:.2f} ({when}) | "
+            f"{_fmt(r.get('spread_wall_row'), '.2f')} | "
+            f"{_fmt(r.get('detached_at_max'), '.1%')} | "
             f"{lo:.2f}-{hi:.2f} | {off:.1%} | "
             + " | ".join(f"{r['correlations'][k]:.2f}" for k in names)
             + f" | {r['wall_s']:.0f} |")
+    if any(len(v) > 1 for v in groups.values()):
+        lines += ["", "Ensembles (the droplet jittered by 1e-3 dx, seeds 1..; the spread of "
+                  "D_max/D over the members is the run-to-run uncertainty):", "",
+                  "| We | Re | D/dx | runs | D_max/D mean | min-max | (max - min) / mean |",
+                  "|---|---|---|---|---|---|---|"]
+        for (We, Re, n), v in groups.items():
+            m = sum(v) / len(v)
+            lines.append(f"| {We:g} | {Re:g} | {n} | {len(v)} | {m:.3f} | {min(v):.3f}-"
+                         f"{max(v):.3f} | {(max(v) - min(v)) / m:.1%} |")
     atomic_write_text(folder / "table.md", "\n".join(lines) + "\n")
     fig, ax = plt.subplots(figsize=(7, 4.5))
     wes = sorted({r["We"] for r in records})
@@ -188,6 +222,9 @@ def main(argv=None) -> int:
     p.add_argument("--set", action="append", default=[], metavar="SECTION.KEY=VALUE",
                    help="scene change (repeatable), e.g. fluid.film_tension=True")
     p.add_argument("--tag", help="file-name suffix of these runs (default: from --set)")
+    p.add_argument("--ensemble", type=int, default=1,
+                   help="runs per level: the droplet jittered by 1e-3 dx with seeds 1.. "
+                        "(the spread of D_max over them is the run-to-run uncertainty)")
     p.add_argument("--report", type=Path, help="write results.json, table.md, spreading.png")
     a = p.parse_args(argv)
     try:
@@ -203,6 +240,8 @@ def main(argv=None) -> int:
         p.error(f"--n: {e}")
     if ns is not None and any(n < 4 for n in ns):
         p.error("--n: at least 4 particles across the droplet")
+    if a.ensemble < 1:
+        p.error("--ensemble: at least 1")
     bad = [kv for kv in a.set if "=" not in kv or "." not in kv.partition("=")[0]]
     if bad:
         p.error(f"--set: expected SECTION.KEY=VALUE, got {bad[0]!r}")
@@ -216,10 +255,14 @@ def main(argv=None) -> int:
                 levels = [(particles_across(Re, a.min_n, refine), refine)
                           for refine in ((False, True) if a.refine else (False,))]
             for n, refine in levels:
-                r = run_case(We, Re, n, a.t_end, a.out, refine, a.set, a.tag)
-                print(f"We {We:g} Re {Re:g} D/dx {n}: D_max/D {r['spread']:.3f} at "
-                      f"{r['spread_t_tc']:.2f} t_c ({r['wall_s']:.0f} s)", flush=True)
-                records.append(r)
+                for k in range(a.ensemble):
+                    r = run_case(We, Re, n, a.t_end, a.out, refine, a.set, a.tag, k)
+                    print(f"We {We:g} Re {Re:g} D/dx {n}" + (f" member {k}" if k else "")
+                          + f": D_max/D {r['spread']:.3f} at {r['spread_t_tc']:.2f} t_c "
+                          f"(wall row {r.get('spread_wall_row') or math.nan:.3f}, broken "
+                          f"off {r.get('detached_at_max') or math.nan:.1%}; "
+                          f"{r['wall_s']:.0f} s)", flush=True)
+                    records.append(r)
     if a.report:
         report(records, a.report)
     return 0
