@@ -16,6 +16,7 @@ appended here, with one list rebuild (docs/architecture.md).  Only the driver la
 from __future__ import annotations
 
 import logging
+import math
 import platform
 import sys
 import time
@@ -269,6 +270,15 @@ class Simulation:
         for mod in self.modules:
             for k, v in mod.dt_limits(self.ctx).items():
                 limits[f"{mod.name}.{k}"] = v
+        bad = {k: v for k, v in limits.items() if not (v > 0.0 and math.isfinite(v))}
+        if bad:
+            # a limit <= 0 or NaN comes from a broken state (a density <= 0, a NaN speed);
+            # taking it would step backwards or never end
+            k, v = next(iter(bad.items()))
+            raise SimulationStopped(
+                f"at t = {self.t:.6g} s, step {self.step_count}: the time-step limit {k} "
+                f"is {v!r} (not a positive number): the state is broken (the last output "
+                "and the checkpoint hold the state before it)")
         fixed = self.scene.time.dt
         if fixed is not None and not self.scene.time.cap_dt:
             if limits and fixed > min(limits.values()):

@@ -121,6 +121,50 @@ def test_non_finite_state_is_never_written(tmp_path):
         MODULES.pop("poison", None)
 
 
+def _negative_limit_class():
+    from sphfem.physics import PhysicsModule
+
+    class _NegativeLimit(PhysicsModule):
+        """A limit that turns negative at step 3 (as the viscous limit h^2 rho_min / mu does
+        when a density goes below 0): the driver must stop, not step backwards for ever."""
+
+        name = "neglimit"
+
+        def dt_limits(self, ctx):
+            return {"viscous": 1e-3 if ctx.step < 3 else -8.8e-7}
+
+        def step(self, ctx, dt):
+            pass
+
+    return _NegativeLimit
+
+
+NegativeLimit = _negative_limit_class()
+
+
+def test_a_non_positive_time_step_limit_stops_the_run(tmp_path):
+    """A time-step limit <= 0 (or NaN) stops the run with a message naming the limit; the
+    run used to take the negative step and go back in time without end."""
+    from sphfem.physics import MODULES
+    from sphfem.schema import register_module, unregister
+
+    register_module("neglimit", target="test_stability:NegativeLimit")
+    try:
+        data = S.contrast_scene(True)
+        data["physics"]["modules"] = ["neglimit"]
+        del data["heat"]
+        data["time"] = {"t_end": 0.01}
+        out = tmp_path / "run"
+        with pytest.raises(SimulationStopped, match=r"neglimit.viscous is -8.8e-07"):
+            Simulation(parse_scene(data)).run(out, progress=False)
+        s = json.loads((out / "summary.json").read_text())
+        assert s["status"] == "stopped" and s["steps"] == 3
+        assert s["t"] == pytest.approx(3e-3)
+    finally:
+        unregister("neglimit")
+        MODULES.pop("neglimit", None)
+
+
 def _nan_writer_class():
     from sphfem.physics import PhysicsModule
 

@@ -1188,6 +1188,9 @@ class AxisymmetricFluid:
         next_cb = self.t + every if every else math.inf
         while self.t < t_end * (1 - 1e-12):
             dt = min(self.stable_dt(), t_end - self.t, max(next_cb - self.t, 1e-300))
+            if not dt > 0.0:  # a density <= 0 or a NaN: a broken state, never step back
+                raise FloatingPointError(f"axisymmetric fluid: time-step limits "
+                                         f"{self.dt_limits()} at t = {self.t:.4g} s")
             self.step(dt)
             if callback is not None and self.t >= next_cb * (1 - 1e-12):
                 callback(self)
