@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import tempfile
+from contextlib import contextmanager
 from pathlib import Path
 
 import numpy as np
@@ -78,6 +79,25 @@ def test_heat_guard_stops_an_unstable_explicit_run_before_nan(tmp_path):
     assert S._nonfinite_files(out) == []
 
 
+@contextmanager
+def _test_module(name: str, attribute: str):
+    """Register this file's module class ``attribute`` as physics module ``name`` for the
+    block, and yield a scene running only it (the contrast scene's particles, t_end 0.01)."""
+    from sphfem.physics import MODULES
+    from sphfem.schema import register_module, unregister
+
+    register_module(name, target=f"test_stability:{attribute}")
+    try:
+        data = S.contrast_scene(True)
+        data["physics"]["modules"] = [name]
+        del data["heat"]
+        data["time"] = {"t_end": 0.01}
+        yield data
+    finally:
+        unregister(name)
+        MODULES.pop(name, None)
+
+
 def _poison_class():
     from sphfem.physics import PhysicsModule
 
@@ -100,15 +120,7 @@ Poison = _poison_class()
 def test_non_finite_state_is_never_written(tmp_path):
     """A module that poisons the state: the NaN guard stops the run and the last output is
     the last finite state."""
-    from sphfem.physics import MODULES
-    from sphfem.schema import register_module, unregister
-
-    register_module("poison", target="test_stability:Poison")
-    try:
-        data = S.contrast_scene(True)
-        data["physics"]["modules"] = ["poison"]
-        del data["heat"]
-        data["time"] = {"t_end": 0.01}
+    with _test_module("poison", "Poison") as data:
         data["output"] = {"every": 2e-3}
         out = tmp_path / "run"
         with pytest.raises(SimulationStopped, match="non-finite"):
@@ -116,9 +128,6 @@ def test_non_finite_state_is_never_written(tmp_path):
         s = json.loads((out / "summary.json").read_text())
         assert "was not written" in s["message"]
         assert S._nonfinite_files(out) == []
-    finally:
-        unregister("poison")
-        MODULES.pop("poison", None)
 
 
 def _negative_limit_class():
@@ -145,24 +154,13 @@ NegativeLimit = _negative_limit_class()
 def test_a_non_positive_time_step_limit_stops_the_run(tmp_path):
     """A time-step limit <= 0 (or NaN) stops the run with a message naming the limit; the
     run used to take the negative step and go back in time without end."""
-    from sphfem.physics import MODULES
-    from sphfem.schema import register_module, unregister
-
-    register_module("neglimit", target="test_stability:NegativeLimit")
-    try:
-        data = S.contrast_scene(True)
-        data["physics"]["modules"] = ["neglimit"]
-        del data["heat"]
-        data["time"] = {"t_end": 0.01}
+    with _test_module("neglimit", "NegativeLimit") as data:
         out = tmp_path / "run"
         with pytest.raises(SimulationStopped, match=r"neglimit.viscous is -8.8e-07"):
             Simulation(parse_scene(data)).run(out, progress=False)
         s = json.loads((out / "summary.json").read_text())
         assert s["status"] == "stopped" and s["steps"] == 3
         assert s["t"] == pytest.approx(3e-3)
-    finally:
-        unregister("neglimit")
-        MODULES.pop("neglimit", None)
 
 
 def _nan_writer_class():
@@ -378,26 +376,12 @@ def test_a_disabled_guard_fails_a_row_that_must_stop(tmp_path):
 def test_nonfinite_output_fails_the_row(tmp_path):
     """A run whose particle state stays finite but which writes a NaN into a result file:
     the row fails on the output scan."""
-    from sphfem.physics import MODULES
-    from sphfem.schema import register_module, unregister
-
-    register_module("nanwriter", target="test_stability:NanWriter")
-    try:
-        def build(q):
-            d = S.contrast_scene(True)
-            d["physics"]["modules"] = ["nanwriter"]
-            del d["heat"]
-            d["time"] = {"t_end": 0.01}
-            return d
-
-        row = S.Row("nan-output", "", build, checks={"steps": lambda o: (
+    with _test_module("nanwriter", "NanWriter") as data:
+        row = S.Row("nan-output", "", lambda q: data, checks={"steps": lambda o: (
             o.summary["steps"], 1, ">=")})
         res = S.run_row(row, True, tmp_path / "run")
         assert res.verdict == S.FAILED, res.reason
         assert "non-finite files written: 1 not <= 0" in res.reason
-    finally:
-        unregister("nanwriter")
-        MODULES.pop("nanwriter", None)
 
 
 @pytest.mark.slow  # 124 s of one worker: the default suite's longest test (2026-12-02)
