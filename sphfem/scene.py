@@ -22,7 +22,7 @@ Attribute layout of a :class:`Scene`::
     scene.physics.modules (tuple of str)
     scene.time.t_end / .dt (None) / .cfl / .max_steps (None) / .tc_block (None); times
                    given as "<x> tc" are in seconds here (sphfem.time_units)
-    scene.output.every (None) / .format / .fields (None)
+    scene.output.every (None) / .format / .fields (None) / .exact_times (True)
     scene.heat, scene.fluid, ... : the section of each listed module (None if not listed)
 """
 
@@ -215,6 +215,12 @@ OUTPUT = Section("output", (
                '"0.25 tc"; default: first and last state)', "interval"),
     Param("format", str, "vtu", choices=("vtu",), doc="particle file format (VTU + PVD)"),
     Param("fields", STRINGS, None, doc="particle fields to write (default: all)"),
+    Param("exact_times", bool, True,
+          doc="`true`: the step is shortened to land on each output time (outputs at "
+              "exactly every `every`); `false`: the step is never shortened and an output "
+              "is written after the first step that reaches its time, so the run itself "
+              "does not depend on `every` (a flow sensitive to small perturbations, e.g. a "
+              "lamella's late spreading, otherwise changes with the output interval)"),
 ), doc="Result files.")
 
 CORE = (SCENE, DOMAIN, SPH, MATERIALS, BLOCKS, PHYSICS, TIME, OUTPUT)

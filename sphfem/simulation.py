@@ -339,6 +339,7 @@ class Simulation:
         t_end = self.scene.time.t_end
         max_steps = self.scene.time.max_steps
         every = self.scene.output.every
+        exact_times = self.scene.output.exact_times
         series = ParticleSeries(out)
         fields = self.scene.output.fields or None
         self._earlier = None
@@ -371,7 +372,7 @@ class Simulation:
                 dt, limiter = self.stable_dt()
                 limit_min = min(limit_min, dt)
                 dt = min(dt, t_end - self.t)
-                if every:
+                if every and exact_times:
                     dt = min(dt, max(next_out - self.t, 1e-300))
                 self.step(dt)
                 self.check_state()
@@ -381,7 +382,8 @@ class Simulation:
                 if self.t >= next_out * (1 - 1e-12):
                     series.write(self.t, self.particles, fields)
                     self.save_checkpoint(out / CHECKPOINT, series)
-                    next_out += every
+                    while next_out <= self.t * (1 + 1e-12):  # (several when not exact)
+                        next_out += every
         except SimulationStopped as e:
             status, message = "stopped", str(e)
         finally:

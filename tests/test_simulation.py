@@ -120,3 +120,34 @@ def test_cli_setup_error_before_any_output(tmp_path, capsys):
     err = capsys.readouterr().err.strip().splitlines()
     assert len(err) == 1 and "overlap" in err[0]
     assert not out.exists()
+
+
+def _run_box(tmp_path, name, output):
+    scene = parse_scene_toml(_scene_text(output=output), "mem.toml")
+    ps = build_particles(scene)
+    ps.T[:] = _initial_field(ps)
+    sim = Simulation(scene, particles=ps)
+    out = tmp_path / name
+    out.mkdir()
+    summary = sim.run(out, progress=False)
+    order = np.argsort(sim.particles.id)
+    return sim.particles.T[order], summary, out
+
+
+def test_outputs_need_not_shorten_the_step(tmp_path):
+    """[output] exact_times = false: the run takes the same steps as without outputs (the
+    final state to the bit) and writes after the first step that reaches each output time;
+    with the default the step is shortened to land on them (more steps, other state)."""
+    import xml.etree.ElementTree as ET
+
+    T_none, s_none, _ = _run_box(tmp_path, "none", {})
+    T_free, s_free, out = _run_box(tmp_path, "free", {"every": 0.7e-4, "exact_times": False})
+    T_exact, s_exact, _ = _run_box(tmp_path, "exact", {"every": 0.7e-4})
+    assert s_none["steps"] == s_free["steps"] == 100  # dt = 2e-5 to 2e-3
+    np.testing.assert_array_equal(T_free, T_none)
+    assert s_exact["steps"] > 100 and not np.array_equal(T_exact, T_none)
+    times = [float(d.get("timestep")) for d in
+             ET.parse(out / "particles.pvd").getroot().iter("DataSet")]
+    # t = 0, then the first step at or past k 0.7e-4 (k = 1..28), then the end
+    want = [0.0] + [2e-5 * np.ceil(k * 0.7e-4 / 2e-5 - 1e-9) for k in range(1, 29)] + [2e-3]
+    np.testing.assert_allclose(times, sorted(set(np.round(want, 12))), rtol=0, atol=1e-12)

@@ -95,3 +95,9 @@ def test_ensemble_members_jitter_the_droplet_and_the_report_tabulates_them(study
     assert "| 30 | 1000 | 61 | 3 | 3.000 | 2.900-3.100 | 6.7% |" in table
     assert "| 30 | 1000 | 87 | 0 | 4.3 | 2.70 (1.40) | - | - |" in table
     assert (tmp_path / "spreading.png").exists()
+
+
+def test_the_frame_rate_does_not_perturb_the_runs(study):
+    d = study.scene_for(30.0, 1000.0, 24, 2.0, ["output.every=0.25 tc"])
+    assert d["output"]["exact_times"] is False
+    assert parse_scene(d).output.exact_times is False
