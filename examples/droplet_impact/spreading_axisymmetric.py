@@ -65,11 +65,10 @@ def scene_for(We: float, Re: float, n: int, t_end_tc: float, overrides=(),
     from sphfem.validation import droplet_impact as di
 
     d = di.scene_at(SPEED, n, t_end_tc)
+    drop = next(b for b in d["blocks"] if b["kind"] == "fluid")
     if member:
-        drop = next(b for b in d["blocks"] if b["kind"] == "fluid")
         drop["jitter"] = ENSEMBLE_JITTER
         d["scene"]["seed"] = int(member)
-    drop = next(b for b in d["blocks"] if b["kind"] == "fluid")
     mat = d["materials"][drop["material"]]
     D, rho = 2.0 * drop["radius"], mat["rho0"]
     mat["mu"] = rho * SPEED * D / Re

@@ -115,6 +115,16 @@ def residual_film(D: float, Re: float) -> float:
     return RESIDUAL_FILM * D * Re ** -0.4
 
 
+def _meridian(r, z, wall_level: float):
+    """``r`` and the height above ``wall_level``, ``z - wall_level``, as float arrays of one
+    shape (a ValueError otherwise)."""
+    r = np.asarray(r, float)
+    z = np.asarray(z, float) - wall_level
+    if r.shape != z.shape:
+        raise ValueError(f"r and z differ in shape: {r.shape} vs {z.shape}")
+    return r, z
+
+
 #: the inviscid lamella at the impact axis, h(0, t) = ETA D / (tau + TAU0)^2 (Roisman,
 #: Berberovic & Tropea 2009): the constants fitted to their simulations of a drop on a wall
 LAMELLA_ETA = 0.39
@@ -149,10 +159,7 @@ def centre_thickness(r, z, wall_level: float, dx: float, *, radius: float = 2.0,
     above the wall plus dx / 2 (each point stands for a cell dx tall), so k rows on the
     wall read k dx.  0 when the axis is dry (no point there, or none on the wall): a
     hole.  Fluid thrown above a gap (drops over the film) is not counted."""
-    r = np.asarray(r, float)
-    z = np.asarray(z, float) - wall_level
-    if r.shape != z.shape:
-        raise ValueError(f"r and z differ in shape: {r.shape} vs {z.shape}")
+    r, z = _meridian(r, z, wall_level)
     zz = np.sort(z[np.abs(r) < radius * dx])
     if not len(zz) or zz[0] > 1.5 * dx:
         return 0.0
@@ -281,16 +288,9 @@ def _contact_layer(x, wall_level, dx, kind, axis, within):
 
 
 def _largest_cluster(lateral, link):
-    """Rows of the largest group of points joined by links shorter than ``link``."""
-    from scipy.sparse import coo_matrix
-    from scipy.sparse.csgraph import connected_components
-    from scipy.spatial import cKDTree
-
-    pairs = cKDTree(lateral).query_pairs(link, output_type="ndarray")
-    n = len(lateral)
-    g = coo_matrix((np.ones(len(pairs)), (pairs[:, 0], pairs[:, 1])), shape=(n, n))
-    _, labels = connected_components(g, directed=False)
-    return lateral[labels == np.bincount(labels).argmax()]
+    """Rows of the largest group of points joined by links shorter than ``link``
+    (:func:`main_body` counting points)."""
+    return lateral[main_body(lateral, link)]
 
 
 def main_body(x, link: float, weights=None):
@@ -329,10 +329,7 @@ def body_contact_diameter(r, z, wall_level: float, dx: float, mass=None, *,
     wall.  This is the maximum-spreading measure of experiments (the lamella's own rim,
     not satellite drops): rings shed from the rim and stray rings that slide out on the
     wall ahead of it do not count, whatever their spacing along the wall."""
-    r = np.asarray(r, float)
-    z = np.asarray(z, float) - wall_level
-    if r.shape != z.shape:
-        raise ValueError(f"r and z differ in shape: {r.shape} vs {z.shape}")
+    r, z = _meridian(r, z, wall_level)
     if not len(r):
         return 0.0, 0.0
     m = np.ones(len(r)) if mass is None else np.asarray(mass, float)
@@ -399,10 +396,7 @@ def lamella_root_radius(r, z, wall_level: float, dx: float, min_thickness: float
     wall), the root is found where the wedge is wider than ``gap`` dx: it converges to the
     contact point as dx -> 0.
     """
-    r = np.asarray(r, float)
-    z = np.asarray(z, float) - wall_level
-    if r.shape != z.shape:
-        raise ValueError(f"r and z differ in shape: {r.shape} vs {z.shape}")
+    r, z = _meridian(r, z, wall_level)
     if not len(r):
         return 0.0
     w = bin_width * dx
