@@ -287,6 +287,10 @@ class AxisymmetricFluidModule(PhysicsModule):
         #: the domain box's corners
         self._domain = (np.asarray(scene.domain.lo, float), np.asarray(scene.domain.hi, float))
 
+    def _options(self) -> dict:
+        """``fluid_options`` with the scene's ``csf_meridian``."""
+        return {**self.fluid_options, "csf_meridian": self.scene.fluid.csf_meridian}
+
     def fields(self):
         f = np.float64
         return {"v": (f, 2), "p": (f, 1), "f_fluid": (f, 2)}
@@ -309,7 +313,8 @@ class AxisymmetricFluidModule(PhysicsModule):
             shift_surface=self.params.shifting == "all",
             shift_speed=self.params.shifting_speed, skin=self.SKIN,
             wall_friction=self.scene.fluid.wall_friction,
-            film_tension=self.scene.fluid.film_tension, **self.fluid_options)
+            film_tension=self.scene.fluid.film_tension,
+            **self._options())
         self.nrm = nrm
         wl = np.flatnonzero(kind == WALL)
         self._walls = wl

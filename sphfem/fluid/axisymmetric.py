@@ -702,6 +702,11 @@ class AxisymmetricFluid:
     CSF's axis band takes its curvature from the band's edge (same module, "Curvature at
     the axis"; default off).  ``csf_curvature_smoothing``: the CSF's curvature averaged
     along the surface over this many supports (same module, "Curvature smoothing"; 1: off).
+    ``csf_meridian``: "csf" (default) or "pair": the meridian curvature's part of the force
+    as the pair force of :mod:`sphfem.fluid.axisymmetric_pair_tension` (the hoop part stays
+    the CSF's); with it ``free_surface_no_tension`` holds only the rings next to the axis,
+    where the CSF's meridian part acts (the pair force's tension lives in the surface
+    rings' pressure).
 
     ``axis_alpha``: the artificial viscosity's alpha of the rings within one support of the
     axis (smoothstep back to the scene's alpha at two supports; pairs take the mean of
@@ -729,7 +734,7 @@ class AxisymmetricFluid:
                  shift_surface: bool = True, shift_speed: str = "local", skin: float = 0.0,
                  wall_friction: str = "sph", film_tension: bool = False,
                  csf_axis_curvature: bool = False, csf_curvature_smoothing: float = 1.0,
-                 axis_alpha: float = 0.0):
+                 axis_alpha: float = 0.0, csf_meridian: str = "csf"):
         self.x = np.array(x, dtype=np.float64)
         n = self.n = self.x.shape[0]
         self.v = np.array(v, dtype=np.float64).reshape(n, 2)
@@ -803,7 +808,8 @@ class AxisymmetricFluid:
         self.last_shift = 0.0
         self.csf = (AxisymmetricCSF(surface_tension, self.kcode, hoop=not self.planar,
                                     film=film_tension, axis_curvature=csf_axis_curvature,
-                                    curvature_smoothing=csf_curvature_smoothing)
+                                    curvature_smoothing=csf_curvature_smoothing,
+                                    meridian=csf_meridian, rho0=pa.rho0)
                     if surface_tension > 0.0 else None)
         self.wall_normals = None if wall_normals is None else np.asarray(
             wall_normals, float).reshape(n, 2)
@@ -1137,6 +1143,12 @@ class AxisymmetricFluid:
         support drifts below rho0 and its tension pulls its neighbours out of the surface."""
         if self.free_surface_no_tension:
             s = self.fluid & (self.lam < 0.75) & (self.rho < self.params.rho0)
+            if self.csf is not None and self.csf.meridian == "pair":
+                # the pair force's tension lives in the surface rings' pressure: held only
+                # where the CSF's meridian part acts, next to the axis
+                from sphfem.fluid.axisymmetric_pair_tension import PAIR_AXIS_BAND
+
+                s &= (np.abs(self.x[:, 0]) < PAIR_AXIS_BAND[1] * self.R) & (not self.planar)
             self.rho[s] = self.params.rho0
 
     def _shift(self, dt: float) -> None:

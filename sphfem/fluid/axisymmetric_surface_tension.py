@@ -662,7 +662,14 @@ class AxisymmetricCSF:
 
     def __init__(self, sigma: float, kernel_code: int = kernels.WENDLAND_C2,
                  axis_band=AXIS_BAND, hoop: bool = True, film: bool = False,
-                 axis_curvature: bool = False, curvature_smoothing: float = 1.0):
+                 axis_curvature: bool = False, curvature_smoothing: float = 1.0,
+                 meridian: str = "csf", wall_colour: float | None = None,
+                 rho0: float | None = None):
+        if meridian not in ("csf", "pair"):
+            raise ValueError(f'meridian must be "csf" or "pair", got {meridian!r}')
+        if meridian == "pair" and film:
+            raise ValueError('the film model replaces the CSF on thin films; it does not go '
+                             'with meridian = "pair"')
         if not sigma >= 0.0:
             raise ValueError(f"surface tension sigma must be >= 0, got {sigma}")
         if not curvature_smoothing >= 1.0:
@@ -685,6 +692,17 @@ class AxisymmetricCSF:
         self.curvature_smoothing = float(curvature_smoothing)
         #: the film model (module docstring, "Thin films"): off by default
         self.film = bool(film)
+        #: "csf": sigma (kappa_m + kappa_h) grad C; "pair": the meridian part as the pair
+        #: force of :mod:`sphfem.fluid.axisymmetric_pair_tension`, the hoop part the CSF's
+        self.meridian = meridian
+        from sphfem.fluid.axisymmetric_pair_tension import WALL_COLOUR_90
+
+        #: the walls' colour psi of the pair force (0.5: 90 degrees)
+        self.wall_colour = WALL_COLOUR_90 if wall_colour is None else float(wall_colour)
+        self._pair = None  # (gamma_k, wall rows, their static normals), set on first use
+        #: the rest density of the pair force's K_ij (None: the fluid's median density at
+        #: the first evaluation)
+        self.rho0 = None if rho0 is None else float(rho0)
         self.state = None
         self.kappa_m = self.kappa_h = np.zeros(0)
         #: film model, real rows of the last evaluation: weight phi, wall contact, the
@@ -699,6 +717,7 @@ class AxisymmetricCSF:
         fields already filled), its neighbour list ``offsets`` / ``indices`` (radius >= R),
         scalar support ``R``, z period ``Lz`` (0: open)."""
         m = x.shape[0]
+        self._R = float(R)
         st = self.state = csf_state(self.state, m, 2)
         kc = colour_kinds(kind)
         period = np.array([0.0, float(Lz)])
@@ -720,7 +739,11 @@ class AxisymmetricCSF:
         if self.hoop:
             hoop_curvature(np.abs(x[:, 0]), st.g, st.omega, self.kappa_m, a * R, b * R, kh)
         self.kappa_h = kh
-        st.kappa += kh
+        if self.meridian == "pair":  # the meridian part is the pair force's (below) away
+            # from the axis, the CSF's within PAIR_AXIS_BAND of it
+            st.kappa[:] = kh + (1.0 - self._pair_weight(x)) * self.kappa_m
+        else:
+            st.kappa += kh
         if self.axis_curvature and self.hoop:
             axis_curvature_extension(x, st.kappa, st.omega, kind, n, a * R, b * R, R,
                                      float(Lz))
@@ -730,14 +753,65 @@ class AxisymmetricCSF:
                              float(Lz))
             mirror_scalar(n, src, st.kappa)
         work = np.zeros((m, 2))
-        csf_force(x, A, rho, kc, offsets, indices, R, ks, kcode, period, self.sigma,
-                  DELTA_FACTOR, SHEPARD_MIN, st.g, st.omega, st.kappa, st.kbar, work)
+        if self.meridian == "csf" or self.hoop:
+            csf_force(x, A, rho, kc, offsets, indices, R, ks, kcode, period, self.sigma,
+                      DELTA_FACTOR, SHEPARD_MIN, st.g, st.omega, st.kappa, st.kbar, work)
+        if self.meridian == "pair":
+            self.pair_forces(x, A, rho, kind, offsets, indices, n, src, mtype, R, float(Lz),
+                             work)
         if not self.film:
             acc[:n] += work[:n]
             return st
         phi, fa = self.film_forces(x, A, rho, kind, offsets, indices, n, src, mtype, R, period)
         acc[:n] += (1.0 - phi)[:, None] * work[:n] + fa
         return st
+
+    def _pair_weight(self, x) -> np.ndarray:
+        """Weight of the pair force per augmented row: 1 in planar mode, else smoothstep of
+        |r| from PAIR_AXIS_BAND[0] R to PAIR_AXIS_BAND[1] R (the CSF's meridian part takes
+        the rest)."""
+        from sphfem.fluid.axisymmetric_pair_tension import PAIR_AXIS_BAND
+
+        if not self.hoop:
+            return np.ones(x.shape[0])
+        R = self._R
+        a, b = PAIR_AXIS_BAND
+        u = np.clip((np.abs(x[:, 0]) - a * R) / ((b - a) * R), 0.0, 1.0)
+        return u * u * (3.0 - 2.0 * u)
+
+    def pair_forces(self, x, A, rho, kind, offsets, indices, n, src, mtype, R, Lz, acc):
+        """acc[:n] += the meridian pair force of the real fluid rows
+        (:mod:`sphfem.fluid.axisymmetric_pair_tension`); its normals are kept in
+        ``pair_normals`` (augmented rows)."""
+        from sphfem.fluid import axisymmetric_pair_tension as apt
+
+        m = x.shape[0]
+        kind = np.asarray(kind)
+        fluid = (kind == FLUID) | (kind == MIRROR_FLUID)
+        wall = (kind == WALL) | (kind == MIRROR_WALL)
+        col = np.where(fluid, 1.0, np.where(wall, self.wall_colour, 0.0))
+        rows = np.flatnonzero(kind[:n] == WALL)
+        if self._pair is None or not np.array_equal(self._pair[1], rows):
+            fl = np.flatnonzero(kind[:n] == FLUID)
+            dx = float(np.sqrt(np.median(A[fl]))) if fl.size else R / 3.0
+            if self.rho0 is None:
+                self.rho0 = float(np.median(rho[fl])) if fl.size else 1.0
+            gk = apt.curvature_constant(self.sigma, self.rho0, R, dx)
+            self._pair = (gk, rows, apt.static_wall_normals(x[rows], A[rows], R,
+                                                            self.kernel_code, Lz,
+                                                            axis=self.hoop))
+        gk, rows, static = self._pair
+        nrm = np.zeros((m, 2))
+        nrm[rows] = self.wall_colour * static
+        fac2 = kernels.kernel_sigma(self.kernel_code, 2, R) / (R * R)
+        apt.pair_normals(x, A, col, n, offsets, indices, R, fac2, self.kernel_code, Lz, nrm)
+        mirror_normals(n, src, mtype, nrm, np.zeros(m))
+        self.pair_normals = nrm
+        pa = np.zeros((m, 2))
+        apt.pair_force(x, A, rho, col, fluid, n, offsets, indices, R,
+                       kernels.kernel_sigma(self.kernel_code, 2, R), self.kernel_code, Lz,
+                       gk, self.rho0, nrm, pa)
+        acc[:n] += self._pair_weight(x[:n])[:, None] * pa[:n]
 
     def film_forces(self, x, A, rho, kind, offsets, indices, n, src, mtype, R, period):
         """The film model's weight phi and acceleration of the real rows (module docstring,

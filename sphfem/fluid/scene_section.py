@@ -49,6 +49,13 @@ def _check(rec, ctx, path):
     if rec.film_tension and getattr(meta, "geometry", None) != "axisymmetric":
         ctx.error(f"{path}.film_tension", "film_tension is implemented for geometry = "
                   "\"axisymmetric\" only")
+    if rec.csf_meridian != "csf" and getattr(meta, "geometry", None) != "axisymmetric":
+        ctx.error(f"{path}.csf_meridian", "csf_meridian is a switch of the axisymmetric "
+                  "CSF (geometry = \"axisymmetric\"); planar scenes have surface_tension = "
+                  "\"akinci\"")
+    if rec.csf_meridian == "pair" and rec.film_tension:
+        ctx.error(f"{path}.csf_meridian", "csf_meridian = \"pair\" and film_tension = "
+                  "true both replace the CSF's pull on films: choose one")
     names, mats = _fluid_materials(ctx)
     if not names:
         ctx.error("physics.modules", "the fluid module needs at least one block of kind "
@@ -105,6 +112,14 @@ FLUID = Section("fluid", (
               "line tension of their faces as a membrane stress (2 sigma free, sigma on a "
               "wall) instead of the CSF, whose truncated colour field gives their ends "
               "0-76 % of it (sphfem.fluid.axisymmetric_surface_tension, \"Thin films\")"),
+    Param("csf_meridian", str, "csf", choices=("csf", "pair"),
+          doc="axisymmetric CSF: the force of the meridian curvature as the CSF's sigma "
+              "kappa_m grad C (csf) or as the pair force of Akinci et al. (2013) in the "
+              "(r, z) plane (pair: equal and opposite pair terms, so a film's end is pulled "
+              "by the line force whatever its shape, and a retracting rim stays compact; "
+              "the surface rings are then held at rho >= rho0 only next to the axis, where "
+              "the CSF's meridian part acts, elsewhere the tension lives in their pressure; "
+              "sphfem.fluid.axisymmetric_pair_tension); the hoop part stays the CSF's"),
     Param("gravity", VECTOR, lambda dim: (0.0,) * dim, unit="m/s^2", default_doc="zeros",
           quantity="acceleration", doc="body force per unit mass"),
     Param("gravity_ramp", float, 0.0, unit="s", ge=0.0, quantity="time",
