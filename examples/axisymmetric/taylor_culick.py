@@ -13,12 +13,14 @@ and Culick (1960),
 whatever the viscosity (momentum: d(m V)/dt = 2 sigma with m = rho h x).  Water-like film
 h = 8 um, sigma = 0.072 N/m, mu = 1e-3 Pa s (Oh = 0.04), c0 = 10 V_TC, the impact scene's
 fluid options; the speed is the slope of the retracted length over the second half of the
-run (10-20 h / V_TC).  Measured (this machine, 2026-12-04): with the CSF (``csf``) the film's
-end is yanked back into the film, its rows are wedged apart, the rim forms hollow and
-sprays (speed 0.3 V_TC at 4 rows, the tip moving outward again at 8); with the pair force
-(``pair``, sphfem.fluid.axisymmetric_pair_tension) the rim is a compact disc and the speed
-steady: 0.85 / 0.82 V_TC at 4 / 8 rows.  The planar solver (``surface_tension = "csf"``)
-shows the same failure of the CSF, its Akinci model a compact rim at 0.85 / 0.88 / 0.70
+run (10-20 h / V_TC).  Measured (this machine, 2026-12-04, the command above): with the CSF
+(``csf``) the film's end is yanked back into the film, its rows are wedged apart, the rim
+forms hollow and sprays: 0.59 V_TC at 4 rows and slowing (0.30 over 12-24 h / V_TC), at 8
+rows the retraction stops at 4.7 h and spray then flies outward (speed -1.7); with the pair
+force (``pair``, sphfem.fluid.axisymmetric_pair_tension) the rim is a compact disc and the
+speed steady: 0.84 / 0.83 V_TC at 4 / 8 rows (retracted 16.0 / 16.1 h by 20 h / V_TC).
+The planar solver (``surface_tension = "csf"``) shows the same failure of the CSF, its
+Akinci model a compact rim at 0.85 / 0.88 / 0.70
 V_TC at 4 / 8 / 16 rows.
 """
 

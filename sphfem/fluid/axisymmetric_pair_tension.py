@@ -19,11 +19,14 @@ Why (examples/axisymmetric/taylor_culick.py): the CSF is a field force sigma kap
 whose curvature at the end of a film is of order 1 / dx, so the few rings of the end are
 pulled back into the film, wedge its rows apart and the rim forms hollow (a free film 4
 rows thick, c0 = 10 V_TC, planar solver and the axisymmetric solver's planar mode alike:
-the rim splits into sheets and sprays; the retraction speed is 0.3-0.9 of Taylor-Culick's
-and not converging).  The pair form is a sum of equal and opposite pair terms, so the net
-force on any group of rings is the flux through its edge (the line force 2 sigma of a free
-film's end whatever its shape): with it (the planar solver's Akinci) the rim stays compact
-and retracts at a steady speed.  A spreading lamella is stopped by exactly this pull.
+the rim splits into sheets and sprays; 0.59 of Taylor-Culick's speed at 4 rows and slowing,
+at 8 rows the retraction stops).  The pair form is a sum of equal and opposite pair terms,
+so the net force on any group of rings is the flux through its edge (the line force 2 sigma
+of a free
+film's end whatever its shape): with it the rim stays compact and retracts at a steady
+0.84 / 0.83 V_TC at 4 / 8 rows (the planar solver's Akinci: 0.85 / 0.88 / 0.70 at 4 / 8 /
+16; the shortfall, an effective tension ~0.7 sigma on films thinner than a few supports, is
+not explained yet).  A spreading lamella is stopped by exactly this pull.
 
 The axis: next to it the planar areas A = M / (2 pi r rho) grow as 1 / r and the axis
 mirrors lie 2 r away, so the planar pair sums are distorted there as the CSF's colour
@@ -59,6 +62,7 @@ from numba import njit, prange
 from sphfem import kernels
 from sphfem.fluid.passes import grad_factor
 from sphfem.kernels import FASTMATH, kernel_f
+from sphfem.smallmat import pair_sep
 
 #: the wall's colour for a 90 degree contact angle (module docstring)
 WALL_COLOUR_90 = 0.5
@@ -67,21 +71,12 @@ WALL_COLOUR_90 = 0.5
 PAIR_AXIS_BAND = (2.0, 4.0)
 
 
-@njit(cache=True, inline="always")
-def _sep(x, i, j, Lz):
-    """x_j - x_i in (r, z), minimum image along a z period ``Lz`` (0: none)."""
-    r0 = x[j, 0] - x[i, 0]
-    r1 = x[j, 1] - x[i, 1]
-    if Lz > 0.0:
-        r1 -= Lz * np.rint(r1 / Lz)
-    return r0, r1
-
-
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
 def pair_normals(x, A, col, n, offsets, indices, R, fac2, kcode, Lz, out):
     """out[i] += R sum_j col_j A_j grad_i W_ij over the listed neighbours of the real rows
     i < n with col_i > 0 (the other rows untouched)."""
     R2 = R * R
+    period = np.array([0.0, Lz])
     for i in prange(n):
         if col[i] <= 0.0:
             continue
@@ -91,7 +86,7 @@ def pair_normals(x, A, col, n, offsets, indices, R, fac2, kcode, Lz, out):
             j = indices[jj]
             if col[j] <= 0.0:
                 continue
-            r0, r1 = _sep(x, i, j, Lz)
+            r0, r1, _ = pair_sep(x, i, j, 2, period, Lz > 0.0)
             d2 = r0 * r0 + r1 * r1
             if d2 >= R2 or d2 == 0.0:
                 continue
@@ -108,6 +103,7 @@ def pair_force(x, A, rho, col, fluid, n, offsets, indices, R, ks, kcode, Lz, gam
     """acc[i] += -gamma_k sum_j c_j K_ij A_j W_ij (n_i - n_j) for the real fluid rows i < n
     (module docstring; ``ks`` the kernel's normalisation, W = ks kernel_f(d / R))."""
     R2 = R * R
+    period = np.array([0.0, Lz])
     for i in prange(n):
         if not fluid[i]:
             continue
@@ -117,7 +113,7 @@ def pair_force(x, A, rho, col, fluid, n, offsets, indices, R, ks, kcode, Lz, gam
             j = indices[jj]
             if col[j] <= 0.0:
                 continue
-            r0, r1 = _sep(x, i, j, Lz)
+            r0, r1, _ = pair_sep(x, i, j, 2, period, Lz > 0.0)
             d2 = r0 * r0 + r1 * r1
             if d2 >= R2 or d2 == 0.0:
                 continue
