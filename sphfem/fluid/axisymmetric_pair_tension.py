@@ -152,12 +152,8 @@ def static_wall_normals(xw, Aw, R: float, kernel_code: int, Lz: float = 0.0,
             d = math.hypot(r[0], r[1])
             if d == 0.0 or d >= R:
                 continue
-            out[a] += R * As[j] * _grad_factor_py(d, R, fac2, kernel_code) * r
+            out[a] += R * As[j] * grad_factor(d, R, fac2, kernel_code) * r
     return out
-
-
-def _grad_factor_py(d: float, R: float, fac2: float, kernel_code: int) -> float:
-    return float(grad_factor(d, R, fac2, kernel_code))
 
 
 def curvature_constant(sigma: float, rho0: float, R: float, dx: float) -> float:

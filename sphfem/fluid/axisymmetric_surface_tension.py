@@ -741,7 +741,8 @@ class AxisymmetricCSF:
         self.kappa_h = kh
         if self.meridian == "pair":  # the meridian part is the pair force's (below) away
             # from the axis, the CSF's within PAIR_AXIS_BAND of it
-            st.kappa[:] = kh + (1.0 - self._pair_weight(x)) * self.kappa_m
+            self._w = self._pair_weight(x)
+            st.kappa[:] = kh + (1.0 - self._w) * self.kappa_m
         else:
             st.kappa += kh
         if self.axis_curvature and self.hoop:
@@ -811,7 +812,7 @@ class AxisymmetricCSF:
         apt.pair_force(x, A, rho, col, fluid, n, offsets, indices, R,
                        kernels.kernel_sigma(self.kernel_code, 2, R), self.kernel_code, Lz,
                        gk, self.rho0, nrm, pa)
-        acc[:n] += self._pair_weight(x[:n])[:, None] * pa[:n]
+        acc[:n] += self._w[:n, None] * pa[:n]
 
     def film_forces(self, x, A, rho, kind, offsets, indices, n, src, mtype, R, period):
         """The film model's weight phi and acceleration of the real rows (module docstring,
