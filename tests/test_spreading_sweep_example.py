@@ -101,3 +101,23 @@ def test_the_frame_rate_does_not_perturb_the_runs(study):
     d = study.scene_for(30.0, 1000.0, 24, 2.0, ["output.every=0.25 tc"])
     assert d["output"]["exact_times"] is False
     assert parse_scene(d).output.exact_times is False
+
+
+def test_member_runs_only_the_named_members(study, tmp_path, monkeypatch, capsys):
+    calls = []
+
+    def fake(We, Re, n, t_end, out, refined, sets, tag, k):
+        calls.append((n, k))
+        return {"spread": 3.0, "spread_t_tc": 2.0, "wall_s": 1.0}
+
+    monkeypatch.setattr(study, "run_case", fake)
+    study.main(["--out", str(tmp_path), "--we", "30", "--re", "1000", "--n", "24,32",
+                "--member", "2", "--member", "1"])
+    assert calls == [(24, 1), (24, 2), (32, 1), (32, 2)]
+    calls.clear()
+    study.main(["--out", str(tmp_path), "--we", "30", "--re", "1000", "--n", "24",
+                "--ensemble", "2"])
+    assert calls == [(24, 0), (24, 1)]
+    with pytest.raises(SystemExit):
+        study.main(["--out", str(tmp_path), "--member", "-1"])
+    assert "--member" in capsys.readouterr().err
