@@ -121,3 +121,21 @@ def test_member_runs_only_the_named_members(study, tmp_path, monkeypatch, capsys
     with pytest.raises(SystemExit):
         study.main(["--out", str(tmp_path), "--member", "-1"])
     assert "--member" in capsys.readouterr().err
+
+
+def test_convergence_of_the_ensemble_means(study):
+    """Means following f = 3 + 100 / n^2 exactly: order 2 and limit 3 recovered; the
+    finest level's distance counts its members' half-range (0.1 / 3 here, + the rest)."""
+    g = {(30.0, 1000.0, n): [3.0 + 100.0 / n**2 - 0.1, 3.0 + 100.0 / n**2 + 0.1]
+         for n in (32, 64, 128)}
+    g[(100.0, 300.0, 24)] = [2.0]  # a case with one level: no line
+    lines = study.convergence_lines(g)
+    rows = [row for row in lines if row.startswith("| 30 |")]
+    assert len(rows) == 1 and not any(row.startswith("| 100 |") for row in lines)
+    cells = [c.strip() for c in rows[0].split("|")[1:-1]]
+    assert cells[2] == "32, 64, 128" and cells[4] == "2.00"
+    assert cells[5].startswith("3.000 +- ")
+    est = 100.0 / 128**2  # finest - limit; GCI = 1.25 * (f3 - f2) / (r^p - 1)
+    gci = 1.25 * (100.0 / 64**2 - est) / 3.0
+    assert cells[6] == f"{(est + gci + 0.1) / 3.0:.1%}"
+    assert study.convergence_lines({(30.0, 1000.0, 32): [3.0]}) == []

@@ -144,6 +144,41 @@ def _fmt(x, spec: str) -> str:
     return "-" if x is None else format(x, spec)
 
 
+def convergence_lines(groups: dict[tuple, list[float]]) -> list[str]:
+    """Markdown lines: for each (We, Re) run at three or more spacings, the observed order,
+    Richardson limit and GCI error bar of the mean D_max / D over each level's members
+    (:func:`sphfem.validation.richardson.richardson`, the last three levels), and the
+    finest level's distance from the limit, its error bar and its members' half-range added
+    (the droplet-impact case's "converged" measure with the run-to-run scatter counted)."""
+    from sphfem.validation.richardson import richardson
+
+    cases: dict[tuple, list[tuple[int, list[float]]]] = {}
+    for (We, Re, n), v in sorted(groups.items()):
+        cases.setdefault((We, Re), []).append((n, v))
+    out = []
+    for (We, Re), lv in cases.items():
+        if len(lv) < 3:
+            continue
+        if not out:
+            out = ["", "Convergence of the ensemble means (Richardson over the last three "
+                   "levels; the finest level's |mean - limit| + error bar + half its "
+                   "members' range, relative to the limit):", "",
+                   "| We | Re | D/dx | means | order | limit +- error bar | finest's distance |",
+                   "|---|---|---|---|---|---|---|"]
+        ns = [n for n, _ in lv]
+        means = [sum(v) / len(v) for _, v in lv]
+        est = richardson([1.0 / n for n in ns], means)
+        fin = lv[-1][1]
+        dist = (abs(est.finest - est.value) + est.error_bar
+                + 0.5 * (max(fin) - min(fin))) / abs(est.value)
+        order = f"{est.order:.2f}" if est.order is not None else "none"
+        out.append(f"| {We:g} | {Re:g} | {', '.join(map(str, ns))} | "
+                   f"{', '.join(f'{m:.3f}' for m in means)} | {order} | {est.value:.3f} +- "
+                   f"{est.error_bar:.3f}{' (' + est.note + ')' if est.note else ''} | "
+                   f"{dist:.1%} |")
+    return out
+
+
 def report(records: list[dict], folder: Path) -> None:
     """results.json, table.md and spreading.png in ``folder``."""
     import matplotlib
@@ -185,6 +220,7 @@ def report(records: list[dict], folder: Path) -> None:
             m = sum(v) / len(v)
             lines.append(f"| {We:g} | {Re:g} | {n} | {len(v)} | {m:.3f} | {min(v):.3f}-"
                          f"{max(v):.3f} | {(max(v) - min(v)) / m:.1%} |")
+    lines += convergence_lines(groups)
     atomic_write_text(folder / "table.md", "\n".join(lines) + "\n")
     fig, ax = plt.subplots(figsize=(7, 4.5))
     wes = sorted({r["We"] for r in records})
