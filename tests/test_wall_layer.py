@@ -8,7 +8,12 @@ import numpy as np
 import pytest
 
 from sphfem.fluid.axisymmetric import AxisymmetricFluid
-from sphfem.fluid.wall_layer import advance_layer, friction_factor, plug_traction_constant
+from sphfem.fluid.wall_layer import (
+    advance_layer,
+    contact_line_weight,
+    friction_factor,
+    plug_traction_constant,
+)
 from sphfem.fluid.wcsph import FluidParams
 from sphfem.particles import FLUID, WALL
 
@@ -145,3 +150,63 @@ def test_scene_key_is_axisymmetric_only():
     assert parse_scene(ax, source="axisymmetric").fluid.wall_friction == "layer"  # default
     ax["fluid"]["wall_friction"] = "viscous"
     assert parse_scene(ax, source="axisymmetric").fluid.wall_friction == "viscous"
+
+
+def _lists(x, R):
+    from scipy.spatial import cKDTree
+
+    nb = cKDTree(x).query_ball_point(x, 1.1 * R)
+    off = np.zeros(len(x) + 1, np.int64)
+    off[1:] = np.cumsum([len(b) for b in nb])
+    return off, np.concatenate([np.sort(b) for b in nb]).astype(np.int64)
+
+
+def test_contact_line_weight_marks_the_end_of_each_wall_row():
+    """A 12 x 3 lattice film (wall normal +z): the end column of each row has weight 1, every
+    other ring 0 (one ring behind the end s = 0.09 < 0.35); a ring alone in its layer 1;
+    rows off the band 0."""
+    from sphfem import kernels
+
+    x = np.array([(i + 0.5, j + 0.5) for i in range(12) for j in range(3)]
+                 + [(30.0, 0.5)])
+    n, R = len(x), 3.0
+    off, ind = _lists(x, R)
+    band = np.ones(n, np.int8)
+    band[1] = 0
+    out = np.zeros(n)
+    contact_line_weight(x, np.ones(n, bool), off, ind, band, np.tile([0.0, 1.0], (n, 1)), n,
+                        np.full(n, R), kernels.kernel_code("wendland_c2"), 0.75,
+                        np.zeros(2), out)
+    w = out[:-1].reshape(12, 3)
+    assert np.all(w[[0, -1], :].ravel()[[0, 2, 3, 4, 5]] == 1.0)  # (0, 1) is off the band
+    assert out[1] == 0.0
+    assert np.all(w[1:-1] == 0.0)
+    assert out[-1] == 1.0
+
+
+def test_layer_friction_is_lifted_at_the_contact_line():
+    """A film 12 x 3 rings sliding at U over a wall (planar, not periodic): after the first
+    steps the young layer brakes the film's interior (f > 1) while the rings at the film's
+    two ends along the wall, its contact lines, feel the plain wall term (f = 1)."""
+    dx, nu = 1e-6, 1e-6
+    N = 12
+    xf = np.array([((i + 10.5) * dx, (j + 0.5) * dx) for i in range(N) for j in range(3)])
+    xw = np.array([((i + 0.5) * dx, -(j + 0.5) * dx) for i in range(N + 20) for j in range(3)])
+    x = np.vstack([xf, xw])
+    kind = np.r_[np.full(len(xf), FLUID), np.full(len(xw), WALL)].astype(np.int8)
+    v = np.zeros_like(x)
+    v[kind == FLUID, 0] = U
+    nrm = np.zeros_like(x)
+    nrm[kind == WALL, 1] = 1.0
+    pa = FluidParams(rho0=RHO, c0=10.0, mu=RHO * nu, delta=0.0)
+    s = AxisymmetricFluid(x, v, np.full(len(x), RHO), kind, RHO * dx * dx, dx * dx, 3 * dx,
+                          pa, planar=True, wall_normals=nrm, wall_friction="layer")
+    s.evaluate()
+    for _ in range(3):
+        s.step(0.2 * s.stable_dt())
+    ends = np.isin(np.round(xf[:, 0] / dx - 0.5).astype(int), (10, 10 + N - 1))
+    bottom = xf[:, 1] < dx
+    assert np.all(s.contact_line[:len(xf)][ends & bottom] > 0.99)
+    assert np.all(s.fw[:len(xf)][ends & bottom] == 1.0)
+    assert np.all(s.contact_line[:len(xf)][~ends] == 0.0)
+    assert np.all(s.fw[:len(xf)][~ends & bottom] > 1.5)

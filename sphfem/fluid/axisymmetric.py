@@ -821,6 +821,10 @@ class AxisymmetricFluid:
         wl = self.kind == WALL
         #: per-row factor of the wall pairs' viscous term (sphfem.fluid.wall_layer, eq. 3)
         self.fw = np.ones(n)
+        #: the layer's friction factor is lifted at the end of a wall row (the contact
+        #: line: sphfem.fluid.wall_layer, "Contact line"); ``contact_line`` its weight
+        self.layer_contact_line = True
+        self.contact_line = np.zeros(n)
         #: squared shear thickness of each fluid row's wall layer [m^2] (< 0: none)
         self.delta2 = np.full(n, -1.0)
         #: the layer equation's inputs from the last evaluation (``wall_friction = "layer"``)
@@ -1054,19 +1058,30 @@ class AxisymmetricFluid:
         a = np.zeros(n)
         hoop = qh[:n] if not self.planar else np.zeros(n)
         surface_divergence(gradv[:n], np.ascontiguousarray(hoop), bn, band, a)
-        self._layer = (band, a, x, nl, Rp)
+        self._layer = (band, a, x, nl, Rp, bn, kind)
 
     def _advance_layer(self, dt: float) -> None:
         """Eq. (2) of :mod:`sphfem.fluid.wall_layer` over dt from the last evaluation, then
         the friction factors of the next evaluations (eq. 3)."""
         from sphfem.fluid.wall_layer import advance_layer, friction_factor
 
-        band, a, x, nl, Rp = self._layer
+        band, a, x, nl, Rp, bn, kind = self._layer
         nu = self.params.mu / self.params.rho0
         advance_layer(self.delta2, band, a, nu, dt, float(self.R) ** 2, x, nl.offsets,
                       nl.indices, Rp, self.kcode)
-        self.fw = friction_factor(self.delta2, self.wall_dx, self.wall_S, nu, dt, self.h,
-                                  self.params.visc_cfl)
+        fw = friction_factor(self.delta2, self.wall_dx, self.wall_S, nu, dt, self.h,
+                             self.params.visc_cfl)
+        if self.layer_contact_line:
+            from sphfem.fluid.wall_layer import contact_line_weight
+
+            cl = np.zeros(self.n)
+            liquid = (kind == FLUID) | (kind == MIRROR_FLUID)
+            contact_line_weight(x, liquid, nl.offsets, nl.indices, band, bn, self.n, Rp,
+                                self.kcode, 0.75 * self.wall_dx,
+                                np.array([0.0, float(self.Lz)]), cl)
+            fw = 1.0 + (fw - 1.0) * (1.0 - cl)
+            self.contact_line = cl
+        self.fw = fw
 
     def _list_valid(self, R: float) -> bool:
         """True when the list of the last build still holds every pair and mirror within R:
