@@ -821,9 +821,8 @@ class AxisymmetricFluid:
         wl = self.kind == WALL
         #: per-row factor of the wall pairs' viscous term (sphfem.fluid.wall_layer, eq. 3)
         self.fw = np.ones(n)
-        #: the layer's friction factor is lifted at the end of a wall row (the contact
-        #: line: sphfem.fluid.wall_layer, "Contact line"); ``contact_line`` its weight
-        self.layer_contact_line = True
+        #: weight of the contact line per row: the layer's friction factor is lifted there
+        #: (sphfem.fluid.wall_layer, "Contact line")
         self.contact_line = np.zeros(n)
         #: squared shear thickness of each fluid row's wall layer [m^2] (< 0: none)
         self.delta2 = np.full(n, -1.0)
@@ -1063,7 +1062,7 @@ class AxisymmetricFluid:
     def _advance_layer(self, dt: float) -> None:
         """Eq. (2) of :mod:`sphfem.fluid.wall_layer` over dt from the last evaluation, then
         the friction factors of the next evaluations (eq. 3)."""
-        from sphfem.fluid.wall_layer import advance_layer, friction_factor
+        from sphfem.fluid.wall_layer import advance_layer, contact_line_weight, friction_factor
 
         band, a, x, nl, Rp, bn, kind = self._layer
         nu = self.params.mu / self.params.rho0
@@ -1071,17 +1070,11 @@ class AxisymmetricFluid:
                       nl.indices, Rp, self.kcode)
         fw = friction_factor(self.delta2, self.wall_dx, self.wall_S, nu, dt, self.h,
                              self.params.visc_cfl)
-        if self.layer_contact_line:
-            from sphfem.fluid.wall_layer import contact_line_weight
-
-            cl = np.zeros(self.n)
-            liquid = (kind == FLUID) | (kind == MIRROR_FLUID)
-            contact_line_weight(x, liquid, nl.offsets, nl.indices, band, bn, self.n, Rp,
-                                self.kcode, 0.75 * self.wall_dx,
-                                np.array([0.0, float(self.Lz)]), cl)
-            fw = 1.0 + (fw - 1.0) * (1.0 - cl)
-            self.contact_line = cl
-        self.fw = fw
+        cl = self.contact_line
+        contact_line_weight(x, (kind == FLUID) | (kind == MIRROR_FLUID), nl.offsets,
+                            nl.indices, band, bn, self.n, Rp, self.kcode, 0.75 * self.wall_dx,
+                            np.array([0.0, float(self.Lz)]), cl)
+        self.fw = 1.0 + (fw - 1.0) * (1.0 - cl)
 
     def _list_valid(self, R: float) -> bool:
         """True when the list of the last build still holds every pair and mirror within R:
