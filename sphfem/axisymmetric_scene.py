@@ -312,6 +312,7 @@ class AxisymmetricFluidModule(PhysicsModule):
             shifting=(self.params.shifting_coef if self.params.shifting != "none" else 0.0),
             shift_surface=self.params.shifting == "all",
             shift_speed=self.params.shifting_speed, skin=self.SKIN,
+            shift_surface_lambda=self.params.shifting_surface_lambda,
             wall_friction=self.scene.fluid.wall_friction,
             film_tension=self.scene.fluid.film_tension,
             **self._options())

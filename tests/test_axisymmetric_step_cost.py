@@ -143,6 +143,9 @@ def test_step_kernels_equal_the_numpy_updates_bitwise():
     assert hmax == h.max() and hmin == h.min()
     assert np.array_equal(out[0], nrm) and np.array_equal(out[1], gcs)
     assert np.array_equal(out[2], near) and np.array_equal(out[3], kind_s)
+    # a lower threshold ([fluid] shifting_surface_lambda): fewer rows shifted tangentially
+    _shift_inputs(gc, B, lam, kind, Rp, 0.2, out[1], out[0], out[2], out[3], 0.5)
+    assert np.array_equal(out[2], (lam < 0.5) & ~fragment)
 
 
 def test_gradients_pack_the_pairs_within_support():

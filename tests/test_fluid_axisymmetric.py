@@ -578,6 +578,39 @@ def test_shifting_speed_max_shifts_resting_rings():
         AxisymmetricFluid(x, v, np.full(len(x), 1000.0), kind, M, dx * dx, 3 * dx, pa,
                           shift_speed="fast")
 
+def test_shift_surface_lambda_frees_the_rows_below_the_surface():
+    """``shift_surface_lambda`` (``[fluid] shifting_surface_lambda``): rows with lambda
+    below it are shifted along the surface only; lowering it from 0.75 to 0.5 leaves the
+    surface rows (lambda < 0.5) and the interior (lambda >= 0.75) shifted exactly as
+    before and shifts the rows between in full (across the surface too)."""
+    dx = 1e-3
+    x, kind, M, nrm, nf = _wall_block(dx, 1000.0)
+    rng = np.random.default_rng(5)
+    x[:nf] += rng.uniform(-0.15, 0.15, (nf, 2)) * dx
+    pa = FluidParams(rho0=1000.0, c0=10.0, mu=0.0, delta=0.0, alpha=0.0)
+    v = np.zeros_like(x)
+    v[kind == FLUID, 0] = 1.0
+    moved, lam = {}, None
+    for lam_s in (0.75, 0.5):
+        f = AxisymmetricFluid(x, v, np.full(len(x), 1000.0), kind, M, dx * dx, 3 * dx, pa,
+                              wall_normals=nrm, shifting=5.0 / 3.0,
+                              shift_surface_lambda=lam_s)
+        lam = f.lam.copy()
+        f._shift(0.2 * dx)
+        moved[lam_s] = f.x - x
+    fl = kind == FLUID
+    keep = fl & ((lam < 0.5) | (lam >= 0.75))
+    band = fl & (lam >= 0.5) & (lam < 0.75)
+    assert keep.any() and band.any()
+    assert np.array_equal(moved[0.75][keep], moved[0.5][keep])
+    d = np.linalg.norm(moved[0.75][band] - moved[0.5][band], axis=1)
+    assert d.max() > 1e-6 * dx
+    for bad in (0.0, 1.5):
+        with pytest.raises(ValueError, match="shift_surface_lambda"):
+            AxisymmetricFluid(x, v, np.full(len(x), 1000.0), kind, M, dx * dx, 3 * dx, pa,
+                              shift_surface_lambda=bad)
+
+
 def test_verlet_skin_gives_the_same_steps_bitwise():
     """The neighbour list with a Verlet skin (reused until a ring has moved R skin / 2) and a
     list rebuilt at every evaluation give the same impact to the bit: every pair kernel skips

@@ -533,11 +533,11 @@ def _mirror_positions(n, src, mtype, zw, x):
 
 
 @njit(cache=True)
-def _shift_inputs(gc, B, lam, kind, Rp, lam_min, gcs, nrm, near, kind_out):
+def _shift_inputs(gc, B, lam, kind, Rp, lam_min, gcs, nrm, near, kind_out, lam_near=0.75):
     """The per-row inputs of :func:`sphfem.fluid.surface.shift` for
     :meth:`AxisymmetricFluid._shift` (rows of ``gc``): the outward normal -b / |b|, b = B
-    grad C (-b where |b| = 0), ``near`` = lambda < 0.75 and not a fragment (lambda <=
-    ``lam_min``), grad C h_i / h_max, fragments' kind set to WALL (no shift).  Returns
+    grad C (-b where |b| = 0), ``near`` = lambda < ``lam_near`` and not a fragment (lambda
+    <= ``lam_min``), grad C h_i / h_max, fragments' kind set to WALL (no shift).  Returns
     (h_max, h_min), h = R_i / 2."""
     n = gc.shape[0]
     hmax = -np.inf
@@ -554,7 +554,7 @@ def _shift_inputs(gc, B, lam, kind, Rp, lam_min, gcs, nrm, near, kind_out):
         nrm[i, 0] = -b0 / den
         nrm[i, 1] = -b1 / den
         fragment = lam[i] <= lam_min
-        near[i] = lam[i] < 0.75 and not fragment
+        near[i] = lam[i] < lam_near and not fragment
         f = (0.5 * Rp[i]) / hmax
         gcs[i, 0] = gc[i, 0] * f
         gcs[i, 1] = gc[i, 1] * f
@@ -734,7 +734,8 @@ class AxisymmetricFluid:
                  shift_surface: bool = True, shift_speed: str = "local", skin: float = 0.0,
                  wall_friction: str = "sph", film_tension: bool = False,
                  csf_axis_curvature: bool = False, csf_curvature_smoothing: float = 1.0,
-                 axis_alpha: float = 0.0, csf_meridian: str = "csf"):
+                 axis_alpha: float = 0.0, csf_meridian: str = "csf",
+                 shift_surface_lambda: float = 0.75):
         self.x = np.array(x, dtype=np.float64)
         n = self.n = self.x.shape[0]
         self.v = np.array(v, dtype=np.float64).reshape(n, 2)
@@ -799,6 +800,12 @@ class AxisymmetricFluid:
         #: the speed of the shifting law: "local" |v_i|, "max" the largest fluid speed
         #: (``[fluid] shifting_speed``)
         self.shift_speed = shift_speed
+        if not 0.0 < shift_surface_lambda <= 1.0:
+            raise ValueError("shift_surface_lambda must be in (0, 1], got "
+                             f"{shift_surface_lambda!r}")
+        #: rows with lambda below this are shifted along the surface only
+        #: (``[fluid] shifting_surface_lambda``)
+        self.shift_surface_lambda = float(shift_surface_lambda)
         if not axis_alpha >= 0.0:
             raise ValueError(f"axis_alpha must be >= 0, got {axis_alpha!r}")
         #: the artificial viscosity's alpha next to the axis (class docstring; <= the
@@ -1165,10 +1172,11 @@ class AxisymmetricFluid:
         :mod:`sphfem.fluid.surface`): dr_i = -A h_i |v_i| dt grad C_i, grad C_i = sum_j A_j
         grad_i W_ij over the fluid, the walls and the axis mirrors of this step's evaluation
         (a ring is not pushed across the axis), projected on the surface's tangent where
-        the moment matrix' lambda_i < 0.75, none on fragments (lambda_i <= 0.2), capped at
-        0.1 h_i; the density follows, rho_i += <grad rho>_i . dr_i; the ring keeps its mass
-        (its meridian area follows from r_i).  It moves the rings towards an even planar
-        cover sum_j A_j W_ij = 1 (the areas, not the spacing, are evened out)."""
+        the moment matrix' lambda_i < ``shift_surface_lambda`` (0.75), none on fragments
+        (lambda_i <= 0.2), capped at 0.1 h_i; the density follows, rho_i += <grad rho>_i .
+        dr_i; the ring keeps its mass (its meridian area follows from r_i).  It moves the
+        rings towards an even planar cover sum_j A_j W_ij = 1 (the areas, not the spacing,
+        are evened out)."""
         from sphfem.fluid.surface import shift, shift_floor_speed
 
         a = self.augmented
@@ -1182,7 +1190,7 @@ class AxisymmetricFluid:
         near = np.empty(n, np.bool_)
         kind = np.empty(n, np.int8)
         hmax, hmin = _shift_inputs(gc, B, self.lam, self.kind, a["Rp"], self.renorm_lambda_min,
-                                   gcs, nrm, near, kind)
+                                   gcs, nrm, near, kind, self.shift_surface_lambda)
         out = np.zeros(n)
         shift(self.x, self.v, self.rho, kind, gcs, nrm, near, a["grad_rho"][:n],
               self.shifting * hmax, dt, 0.1 * hmin, self.shift_surface, out,

@@ -157,6 +157,11 @@ FLUID = Section("fluid", (
               "al. 2013; slow regions such as a stagnation point are hardly shifted); max = "
               "the largest fluid speed of the step for every particle (the Mach-scaled "
               "shift of Sun et al. 2017)"),
+    Param("shifting_surface_lambda", float, 0.75, positive=True, le=1.0,
+          doc="axisymmetric scenes: rings whose moment matrix' smallest eigenvalue lambda "
+              "lies below this are shifted along the surface only, the rest in full "
+              "(0.75: every ring within about a support of the surface; lower values let "
+              "the rings of thin films and rims be shifted across them as well)"),
     Param("detect_free_surface", bool, False,
           doc="Marrone et al. (2010) free-surface detection every step (particle field "
               "`free_surface` = 1 on the surface); always on with shifting"),
