@@ -222,11 +222,12 @@ def report(records: list[dict], folder: Path) -> None:
                          f"{max(v):.3f} | {(max(v) - min(v)) / m:.1%} |")
     lines += convergence_lines(groups)
     atomic_write_text(folder / "table.md", "\n".join(lines) + "\n")
-    fig, ax = plt.subplots(figsize=(7, 4.5))
+    cases = sorted({(r["We"], r["Re"]) for r in records})
+    fig, (ax, ax2) = plt.subplots(1, 2, figsize=(12, 4.5))
     wes = sorted({r["We"] for r in records})
     res = sorted({r["Re"] for r in records})
     Re_line = [res[0] * (res[-1] / res[0]) ** (k / 40) for k in range(41)] if len(res) > 1 \
-        else res
+        else [0.9 * res[0], 1.1 * res[0]]
     for i, We in enumerate(wes):
         c = f"C{i}"
         band = [correlation_table(We, Re, 90.0).values() for Re in Re_line]
@@ -241,8 +242,24 @@ def report(records: list[dict], folder: Path) -> None:
     ax.set_xscale("log")
     ax.set_xlabel("Re")
     ax.set_ylabel("D_max / D")
-    ax.set_title("axisymmetric SPH (points) vs correlations (bands, 90 deg)")
+    ax.set_title("SPH (points) vs correlations (bands, 90 deg)", fontsize=10)
     ax.legend(fontsize=8)
+    # each case against the resolution: members, ensemble means, the correlations' band
+    for i, (We, Re) in enumerate(cases):
+        c = f"C{i}"
+        rs = [r for r in records if (r["We"], r["Re"]) == (We, Re)]
+        ax2.plot([r["n"] for r in rs], [r["spread"] for r in rs], "o", color=c, ms=4,
+                 alpha=0.5)
+        ns = sorted({r["n"] for r in rs})
+        ax2.plot(ns, [sum(r["spread"] for r in rs if r["n"] == n)
+                      / sum(1 for r in rs if r["n"] == n) for n in ns], "-", color=c,
+                 label=f"We {We:g}, Re {Re:g}: members, mean")
+        b = correlation_table(We, Re, 90.0).values()
+        ax2.axhspan(min(b), max(b), color=c, alpha=0.15, lw=0)
+    ax2.set_xlabel("particles across D (D/dx)")
+    ax2.set_ylabel("D_max / D")
+    ax2.set_title("against the resolution (band: the correlations, 90 deg)", fontsize=10)
+    ax2.legend(fontsize=8)
     fig.tight_layout()
     fig.savefig(folder / "spreading.png", dpi=120)
     plt.close(fig)
