@@ -244,15 +244,13 @@ def report(records: list[dict], folder: Path) -> None:
     ax.set_ylabel("D_max / D")
     ax.set_title("SPH (points) vs correlations (bands, 90 deg)", fontsize=10)
     ax.legend(fontsize=8)
-    # each case against the resolution: members, ensemble means, the correlations' band
+    # each case against the resolution: members, ensemble means (``groups``), the band
     for i, (We, Re) in enumerate(cases):
         c = f"C{i}"
-        rs = [r for r in records if (r["We"], r["Re"]) == (We, Re)]
-        ax2.plot([r["n"] for r in rs], [r["spread"] for r in rs], "o", color=c, ms=4,
-                 alpha=0.5)
-        ns = sorted({r["n"] for r in rs})
-        ax2.plot(ns, [sum(r["spread"] for r in rs if r["n"] == n)
-                      / sum(1 for r in rs if r["n"] == n) for n in ns], "-", color=c,
+        lv = sorted((n, v) for (we, re_, n), v in groups.items() if (we, re_) == (We, Re))
+        ax2.plot([n for n, v in lv for _ in v], [x for _, v in lv for x in v], "o",
+                 color=c, ms=4, alpha=0.5)
+        ax2.plot([n for n, _ in lv], [sum(v) / len(v) for _, v in lv], "-", color=c,
                  label=f"We {We:g}, Re {Re:g}: members, mean")
         b = correlation_table(We, Re, 90.0).values()
         ax2.axhspan(min(b), max(b), color=c, alpha=0.15, lw=0)
