@@ -578,6 +578,103 @@ def test_shifting_speed_max_shifts_resting_rings():
         AxisymmetricFluid(x, v, np.full(len(x), 1000.0), kind, M, dx * dx, 3 * dx, pa,
                           shift_speed="fast")
 
+def test_strain_speed_is_galilean_and_rotation_invariant():
+    """:func:`strain_speed` = h |S|, S = (L + L^T) / 2: 0 for a rigid rotation, g h / sqrt 2
+    for a simple shear d v_r / d z = g, sqrt 2 e h for a planar extension (e, -e)."""
+    from sphfem.fluid.surface import strain_speed
+
+    h = np.array([1.0, 2.0, 0.5])
+    L = np.array([[0.0, -3.0, 3.0, 0.0], [0.0, 4.0, 0.0, 0.0], [2.0, 0.0, 0.0, -2.0]])
+    out = np.empty(3)
+    strain_speed(h, L, out)
+    assert np.allclose(out, [0.0, 2.0 * 4.0 / math.sqrt(2.0), 0.5 * math.sqrt(2.0) * 2.0],
+                       rtol=1e-14, atol=1e-14)
+
+
+def test_shifting_speed_strain_ignores_the_lab_frame_motion():
+    """``shift_speed = "strain"`` (dr = -A h (h |S|) dt grad C), on a perturbed free block
+    of rings: carried along the axis at 7 m/s (a translation; a uniform v_r is not one
+    here) no ring is shifted, where the "local" law shifts them; in the extension v = e (r,
+    -z) (|S| = sqrt 2 e) the rings away from the surface shift exactly as under the "local"
+    law with |v_i| = sqrt 2 e h_i (the renormalised gradient is exact for a linear field)."""
+    dx = 1e-3
+    r = (np.arange(16) + 0.5) * dx
+    x = np.array([(a, (k + 0.5) * dx) for a in r for k in range(16)])
+    x += np.random.default_rng(3).uniform(-0.15, 0.15, x.shape) * dx
+    x[:, 0] = np.abs(x[:, 0])
+    n = len(x)
+    kind = np.full(n, FLUID, np.int8)
+    M = ring_mass(x[:, 0], 1000.0, dx * dx)
+    pa = FluidParams(rho0=1000.0, c0=10.0, mu=0.0, delta=0.0, alpha=0.0)
+
+    def shifted(v, mode):
+        f = AxisymmetricFluid(x, v, np.full(n, 1000.0), kind, M, dx * dx, 3 * dx, pa,
+                              shifting=5.0 / 3.0, shift_speed=mode)
+        f._shift(0.2 * dx)
+        return f.x - x, f
+
+    v = np.zeros_like(x)
+    v[:, 1] = 7.0
+    d, f = shifted(v, "strain")
+    d_loc, _ = shifted(v, "local")
+    assert np.abs(f.gradv).max() < 1e-9 * 7.0 / dx
+    assert np.abs(d).max() < 1e-12 * dx < 1e-4 * dx < np.abs(d_loc).max()
+    e = 50.0
+    d_strain, f = shifted(e * x * [1.0, -1.0], "strain")
+    inner = f.lam > 0.5  # renormalised rows, away from the surface
+    assert inner.sum() > 50
+    assert np.allclose(f.gradv[inner], [e, 0.0, 0.0, -e], rtol=0, atol=1e-8 * e)
+    assert np.abs(d_strain[inner]).max() > 1e-4 * dx
+    v_loc = np.zeros_like(x)
+    v_loc[:, 0] = math.sqrt(2.0) * e * 0.5 * f.Rp
+    d_local, _ = shifted(v_loc, "local")
+    assert np.allclose(d_strain[inner], d_local[inner], rtol=1e-6, atol=1e-9 * dx)
+
+
+def test_wall_layer_sees_the_lamella_stretching():
+    """The wall layer's surface divergence a = tr L + u_r / r - n . L n (eq. 2 of
+    :mod:`sphfem.fluid.wall_layer`) from the fluid's velocity gradient: a radial film flow u_r
+    = e r over the wall (a lamella, u_r = r / t, has e = 1 / t) is stretched at a = 2 e on
+    every band ring (the renormalised L of a linear field is exact; the rings near the
+    block's far end see its edge).  Until session 20 L was stored with the wrong sign and a
+    came out 0 here (the layer grew as Stokes' and the lamella was under-braked)."""
+    dx = 1e-3
+    x, kind, M, nrm, nf = _wall_block(dx, 1000.0)
+    e = 50.0
+    v = np.zeros_like(x)
+    fl = kind == FLUID
+    v[fl, 0] = e * x[fl, 0]
+    pa = FluidParams(rho0=1000.0, c0=10.0, mu=1e-3, delta=0.0, alpha=0.0)
+    f = AxisymmetricFluid(x, v, np.full(len(x), 1000.0), kind, M, dx * dx, 3 * dx, pa,
+                          wall_normals=nrm, wall_friction="layer")
+    band, a = f._layer[0][:nf] == 1, f._layer[1][:nf]
+    inner = band & (x[:nf, 0] < 8 * dx)
+    assert inner.sum() >= 10
+    assert np.allclose(a[inner], 2.0 * e, rtol=1e-9)
+    assert np.allclose(f.gradv[:nf][inner][:, 0], e, rtol=1e-9)
+
+
+def test_shifting_speed_strain_scene_key():
+    """``[fluid] shifting_speed = "strain"`` is accepted on an axisymmetric scene; a planar
+    scene with it is refused naming the key."""
+    from sphfem.errors import SceneError
+    from sphfem.scene import parse_scene
+    from sphfem.validation import droplet_impact as di
+
+    scene = parse_scene(di.scene_at(10.0, 8, 0.02, overrides=["fluid.shifting_speed=strain"]),
+                        source="test")
+    assert scene.fluid.shifting_speed == "strain"
+    d = di.scene_at(10.0, 8, 0.02, overrides=["fluid.shifting_speed=strain",
+                                              "fluid.wall_friction=sph"])
+    d["scene"]["geometry"] = "cartesian"  # the (r, z) section as a planar (x, y) scene
+    d["domain"]["lo"][0] = -d["domain"]["hi"][0]
+    for b in d["blocks"]:
+        if b["kind"] == "wall":
+            b["lo"][0] = -b["hi"][0]
+    with pytest.raises(SceneError, match="shifting_speed"):
+        parse_scene(d, source="test")
+
+
 def test_shift_surface_lambda_frees_the_rows_below_the_surface():
     """``shift_surface_lambda`` (``[fluid] shifting_surface_lambda``): rows with lambda
     below it are shifted along the surface only; lowering it from 0.75 to 0.5 leaves the

@@ -387,10 +387,11 @@ def forces(x, v, vg, vd, rho, p, A, mt, mu, kind, grad_rho, dvdr, offsets, indic
         nu = mui / ri
         # div_2 v = tr(G B): renormalised (B = identity: the plain sum)
         cont = -(G00 * Bm[i, 0] + (G01 + G10) * Bm[i, 1] + G11 * Bm[i, 2])
-        gradv[i, 0] = -(G00 * Bm[i, 0] + G01 * Bm[i, 1])
-        gradv[i, 1] = -(G00 * Bm[i, 1] + G01 * Bm[i, 2])
-        gradv[i, 2] = -(G10 * Bm[i, 0] + G11 * Bm[i, 1])
-        gradv[i, 3] = -(G10 * Bm[i, 1] + G11 * Bm[i, 2])
+        # L = -G B (cont = -tr L): the sign the wall layer's eq. (2) reads
+        gradv[i, 0] = G00 * Bm[i, 0] + G01 * Bm[i, 1]
+        gradv[i, 1] = G00 * Bm[i, 1] + G01 * Bm[i, 2]
+        gradv[i, 2] = G10 * Bm[i, 0] + G11 * Bm[i, 1]
+        gradv[i, 3] = G10 * Bm[i, 1] + G11 * Bm[i, 2]
         acc[i, 0] = a0 + hoop * nu * dvdr[i, 0] + gravity[0]
         acc[i, 1] = a1 + hoop * nu * dvdr[i, 1] / rr + gravity[1]
         if Bm[i, 3] != 0.0 and frag_no_hoop:  # a fragment: no hoop term (fragment_hoop)
@@ -795,9 +796,11 @@ class AxisymmetricFluid:
         #: True: surface rings shifted along the surface ("all"); False: not at all
         #: ("interior"), as ``[fluid] shifting`` of the planar solver
         self.shift_surface = bool(shift_surface)
-        if shift_speed not in ("local", "max"):
-            raise ValueError(f"shift_speed must be 'local' or 'max', got {shift_speed!r}")
-        #: the speed of the shifting law: "local" |v_i|, "max" the largest fluid speed
+        if shift_speed not in ("local", "max", "strain"):
+            raise ValueError(f"shift_speed must be 'local', 'max' or 'strain', got "
+                             f"{shift_speed!r}")
+        #: the speed of the shifting law: "local" |v_i|, "max" the largest fluid speed,
+        #: "strain" h_i |S_i| (:func:`sphfem.fluid.surface.strain_speed`)
         #: (``[fluid] shifting_speed``)
         self.shift_speed = shift_speed
         if not 0.0 < shift_surface_lambda <= 1.0:
@@ -1023,6 +1026,8 @@ class AxisymmetricFluid:
                self._alpha_c(x, Rp),
                0.0 if self.planar else 1.0, Bm, qh, not self.fragment_hoop, fw,
                wall_art, acc, drho, gradv, prr, *pc[1:])
+        #: the renormalised velocity gradient (L00, L01, L10, L11) of the real rows
+        self.gradv = gradv[:n].copy()
         if self.wall_friction == "layer":
             self._layer_inputs(x, kind, nl, Rp, src, mtype, gradv, qh)
         if self.csf is not None:  # CSF over the fluid's widest support (adaptive_h)
@@ -1177,7 +1182,7 @@ class AxisymmetricFluid:
         dr_i; the ring keeps its mass (its meridian area follows from r_i).  It moves the
         rings towards an even planar cover sum_j A_j W_ij = 1 (the areas, not the spacing,
         are evened out)."""
-        from sphfem.fluid.surface import shift, shift_floor_speed
+        from sphfem.fluid.surface import OWN_SPEED, shift, shift_floor_speed, strain_speed
 
         a = self.augmented
         n = self.n
@@ -1192,9 +1197,13 @@ class AxisymmetricFluid:
         hmax, hmin = _shift_inputs(gc, B, self.lam, self.kind, a["Rp"], self.renorm_lambda_min,
                                    gcs, nrm, near, kind, self.shift_surface_lambda)
         out = np.zeros(n)
+        speed = OWN_SPEED
+        if self.shift_speed == "strain":
+            speed = np.empty(n)
+            strain_speed(0.5 * a["Rp"][:n], self.gradv, speed)
         shift(self.x, self.v, self.rho, kind, gcs, nrm, near, a["grad_rho"][:n],
               self.shifting * hmax, dt, 0.1 * hmin, self.shift_surface, out,
-              shift_floor_speed(self.v, self.kind, self.shift_speed))
+              shift_floor_speed(self.v, self.kind, self.shift_speed), speed)
         self.last_shift = float(out.max() / hmin)
 
     def _reflect(self) -> None:

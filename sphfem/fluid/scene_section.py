@@ -53,6 +53,9 @@ def _check(rec, ctx, path):
         ctx.error(f"{path}.csf_meridian", "csf_meridian is a switch of the axisymmetric "
                   "CSF (geometry = \"axisymmetric\"); planar scenes have surface_tension = "
                   "\"akinci\"")
+    if rec.shifting_speed == "strain" and getattr(meta, "geometry", None) != "axisymmetric":
+        ctx.error(f"{path}.shifting_speed", "shifting_speed = \"strain\" is implemented for "
+                  "geometry = \"axisymmetric\" only (use \"local\" or \"max\")")
     if rec.csf_meridian == "pair" and rec.film_tension:
         ctx.error(f"{path}.csf_meridian", "csf_meridian = \"pair\" and film_tension = "
                   "true both replace the CSF's pull on films: choose one")
@@ -152,11 +155,14 @@ FLUID = Section("fluid", (
               "only; needs the free-surface detection (switched on)"),
     Param("shifting_coef", float, 5.0 / 3.0, positive=True,
           doc="A of the shifting law (Park 2019: 5/3)"),
-    Param("shifting_speed", str, "local", choices=("local", "max"),
+    Param("shifting_speed", str, "local", choices=("local", "max", "strain"),
           doc="the speed |v| in the shifting law: local = each particle's own (Skillen et "
               "al. 2013; slow regions such as a stagnation point are hardly shifted); max = "
               "the largest fluid speed of the step for every particle (the Mach-scaled "
-              "shift of Sun et al. 2017)"),
+              "shift of Sun et al. 2017); strain = h |S|, S the strain rate (axisymmetric "
+              "scenes: Galilean invariant, a film carried at speed is not shifted along "
+              "itself, and the shift vanishes with refinement; needs a larger "
+              "shifting_coef, about D / dx times the local one)"),
     Param("shifting_surface_lambda", float, 0.75, positive=True, le=1.0,
           doc="axisymmetric scenes: rings whose moment matrix' smallest eigenvalue lambda "
               "lies below this are shifted along the surface only, the rest in full "

@@ -204,24 +204,30 @@ def near_surface(kind, offsets, indices, flag, x, R, period, near):
 
 @njit(cache=True, parallel=True)
 def shift(x, v, rho, kind, gc, nrm, near, grad_rho, coef, dt, max_shift, project_surface,
-          out, v_floor=0.0):
+          out, v_floor, speed):
     """Apply dr = -coef max(|v|, ``v_floor``) dt grad C (projected on the tangent plane
     where ``near`` when ``project_surface``, skipped there otherwise), capped at
     ``max_shift``; the density follows with grad rho . dr.  ``out[i]`` receives |dr|.
     ``v_floor`` = the largest fluid speed gives every particle the shift of the fastest
     one (Sun et al. 2017's Ma-scaled shift), so slow regions (stagnation points) are
-    regularised too."""
+    regularised too.  A non-empty ``speed`` (one entry per particle) replaces |v_i|: the
+    Galilean-invariant strain speed of :func:`strain_speed`."""
     n, dim = x.shape
+    own = speed.shape[0] == 0
     for i in prange(n):
         out[i] = 0.0
         if kind[i] != FLUID:
             continue
         if near[i] and not project_surface:
             continue
-        sp = 0.0
-        for k in range(dim):
-            sp += v[i, k] * v[i, k]
-        D = coef * max(np.sqrt(sp), v_floor) * dt
+        if own:
+            sp = 0.0
+            for k in range(dim):
+                sp += v[i, k] * v[i, k]
+            sp = np.sqrt(sp)
+        else:
+            sp = speed[i]
+        D = coef * max(sp, v_floor) * dt
         dr = np.zeros(3)
         for k in range(dim):
             dr[k] = -D * gc[i, k]
@@ -247,13 +253,32 @@ def shift(x, v, rho, kind, gc, nrm, near, grad_rho, coef, dt, max_shift, project
         out[i] = L
 
 
+#: the ``speed`` of :func:`shift` that selects each particle's own |v_i|
+OWN_SPEED = np.empty(0)
+
+
+@njit(cache=True)
+def strain_speed(h, L, out):
+    """out_i = h_i |S_i|, |S| = sqrt(S_ab S_ab) the norm of the strain rate S = (L + L^T) / 2
+    of the velocity gradient L_i (rows of ``L``: L00, L01, L10, L11 in 2D).  The speed of
+    the shifting law that depends on the motion relative to the neighbours only (no
+    rotation, no translation), so a film carried at speed is shifted no more than one at
+    rest, and the shift velocity A h |S| h grad C vanishes as h^2 in the bulk and as h at
+    a surface with refinement."""
+    for i in range(out.shape[0]):
+        s01 = 0.5 * (L[i, 1] + L[i, 2])
+        out[i] = h[i] * math.sqrt(L[i, 0] ** 2 + L[i, 3] ** 2 + 2.0 * s01 * s01)
+
+
 def shift_floor_speed(v, kind, mode: str) -> float:
     """The ``v_floor`` of :func:`shift` for the scene key ``[fluid] shifting_speed``:
-    0 for "local" (each particle's own |v|), the largest fluid speed for "max"."""
-    if mode == "local":
+    0 for "local" (each particle's own |v|) and "strain" (:func:`strain_speed`), the
+    largest fluid speed for "max"."""
+    if mode in ("local", "strain"):
         return 0.0
     if mode != "max":
-        raise ValueError(f"[fluid] shifting_speed must be 'local' or 'max', got {mode!r}")
+        raise ValueError(f"[fluid] shifting_speed must be 'local', 'max' or 'strain', got "
+                         f"{mode!r}")
     f = np.asarray(kind) == FLUID
     if not f.any():
         return 0.0

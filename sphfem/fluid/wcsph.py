@@ -517,7 +517,8 @@ class FluidSolver:
             surface.shift(p.x, p.v, p.rho, p.kind, s.gc, s.nrm, s.near, s.grad,
                           self.params.shifting_coef * self.h, dt, 0.1 * self.h,
                           self.params.shifting == "all", s.shift,
-                          surface.shift_floor_speed(p.v, p.kind, self.params.shifting_speed))
+                          surface.shift_floor_speed(p.v, p.kind, self.params.shifting_speed),
+                          surface.OWN_SPEED)
             self.max_shift = max(self.max_shift, float(s.shift.max()))
         self.wall["integrate"] += time.perf_counter() - t0
         self.t += dt
