@@ -313,6 +313,7 @@ class AxisymmetricFluidModule(PhysicsModule):
             shift_surface=self.params.shifting == "all",
             shift_speed=self.params.shifting_speed, skin=self.SKIN,
             shift_surface_lambda=self.params.shifting_surface_lambda,
+            shift_drift=self.params.shifting_drift,
             wall_friction=self.scene.fluid.wall_friction,
             film_tension=self.scene.fluid.film_tension,
             **self._options())

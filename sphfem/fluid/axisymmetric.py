@@ -736,7 +736,7 @@ class AxisymmetricFluid:
                  wall_friction: str = "sph", film_tension: bool = False,
                  csf_axis_curvature: bool = False, csf_curvature_smoothing: float = 1.0,
                  axis_alpha: float = 0.0, csf_meridian: str = "csf",
-                 shift_surface_lambda: float = 0.75):
+                 shift_surface_lambda: float = 0.75, shift_drift: str = "kept"):
         self.x = np.array(x, dtype=np.float64)
         n = self.n = self.x.shape[0]
         self.v = np.array(v, dtype=np.float64).reshape(n, 2)
@@ -809,6 +809,11 @@ class AxisymmetricFluid:
         #: rows with lambda below this are shifted along the surface only
         #: (``[fluid] shifting_surface_lambda``)
         self.shift_surface_lambda = float(shift_surface_lambda)
+        if shift_drift not in ("kept", "removed"):
+            raise ValueError(f"shift_drift must be 'kept' or 'removed', got {shift_drift!r}")
+        #: "removed": each ring's shift less its neighbourhood's kernel-weighted mean
+        #: (:func:`sphfem.fluid.surface.remove_local_mean`; ``[fluid] shifting_drift``)
+        self.shift_drift = shift_drift
         if not axis_alpha >= 0.0:
             raise ValueError(f"axis_alpha must be >= 0, got {axis_alpha!r}")
         #: the artificial viscosity's alpha next to the axis (class docstring; <= the
@@ -1181,8 +1186,17 @@ class AxisymmetricFluid:
         (lambda_i <= 0.2), capped at 0.1 h_i; the density follows, rho_i += <grad rho>_i .
         dr_i; the ring keeps its mass (its meridian area follows from r_i).  It moves the
         rings towards an even planar cover sum_j A_j W_ij = 1 (the areas, not the spacing,
-        are evened out)."""
-        from sphfem.fluid.surface import OWN_SPEED, shift, shift_floor_speed, strain_speed
+        are evened out).  With ``shift_drift = "removed"`` each ring's shift less the
+        kernel-weighted mean of its neighbourhood's (axis and wall mirrors' shifts mirrored;
+        :func:`sphfem.fluid.surface.remove_local_mean`) is applied."""
+        from sphfem.fluid.surface import (
+            OWN_SPEED,
+            apply_shift,
+            remove_local_mean,
+            shift_displacement,
+            shift_floor_speed,
+            strain_speed,
+        )
 
         a = self.augmented
         n = self.n
@@ -1201,9 +1215,19 @@ class AxisymmetricFluid:
         if self.shift_speed == "strain":
             speed = np.empty(n)
             strain_speed(0.5 * a["Rp"][:n], self.gradv, speed)
-        shift(self.x, self.v, self.rho, kind, gcs, nrm, near, a["grad_rho"][:n],
-              self.shifting * hmax, dt, 0.1 * hmin, self.shift_surface, out,
-              shift_floor_speed(self.v, self.kind, self.shift_speed), speed)
+        dr = np.zeros((n, 2))
+        shift_displacement(self.x, self.v, kind, gcs, nrm, near, self.shifting * hmax, dt,
+                           0.1 * hmin, self.shift_surface,
+                           shift_floor_speed(self.v, self.kind, self.shift_speed), speed, dr)
+        if self.shift_drift == "removed":  # over the listed rows, the mirrors' shifts mirrored
+            xa, ka, nl = a["x"], a["kind"], a["nbrs"]
+            dra = np.zeros_like(xa)
+            dra[:n] = dr
+            mirror_normals(n, a["src"], a["mtype"], dra, np.zeros(xa.shape[0]))
+            remove_local_mean(dra, xa, (ka == FLUID) | (ka == MIRROR_FLUID), nl.offsets,
+                              nl.indices, a["Rp"], self.kcode, np.array([0.0, self.Lz]), n,
+                              dr)
+        apply_shift(self.x, self.rho, a["grad_rho"][:n], dr, 0.1 * hmin, out)
         self.last_shift = float(out.max() / hmin)
 
     def _reflect(self) -> None:

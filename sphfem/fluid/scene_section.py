@@ -163,6 +163,12 @@ FLUID = Section("fluid", (
               "scenes: Galilean invariant, a film carried at speed is not shifted along "
               "itself, and the shift vanishes with refinement; needs a larger "
               "shifting_coef, about D / dx times the local one)"),
+    Param("shifting_drift", str, "kept", choices=("kept", "removed"),
+          doc="removed: each particle's shift less the kernel-weighted mean shift of its "
+              "fluid neighbourhood (sphfem.fluid.surface.remove_local_mean), so shifting "
+              "only rearranges particles among their neighbours and carries no mass along "
+              "a thin film towards its end (which over-spreads a droplet impact by 15-30 %; "
+              "docs/validation/droplet_impact, session 20); kept: the plain shift"),
     Param("shifting_surface_lambda", float, 0.75, positive=True, le=1.0,
           doc="axisymmetric scenes: rings whose moment matrix' smallest eigenvalue lambda "
               "lies below this are shifted along the surface only, the rest in full "

@@ -31,6 +31,7 @@ import math
 import numpy as np
 from numba import njit, prange
 
+from sphfem import kernels
 from sphfem.fluid.passes import grad_factor
 from sphfem.kernels import FASTMATH
 from sphfem.particles import FLUID, WALL
@@ -202,7 +203,6 @@ def near_surface(kind, offsets, indices, flag, x, R, period, near):
                 break
 
 
-@njit(cache=True, parallel=True)
 def shift(x, v, rho, kind, gc, nrm, near, grad_rho, coef, dt, max_shift, project_surface,
           out, v_floor, speed):
     """Apply dr = -coef max(|v|, ``v_floor``) dt grad C (projected on the tangent plane
@@ -211,11 +211,23 @@ def shift(x, v, rho, kind, gc, nrm, near, grad_rho, coef, dt, max_shift, project
     ``v_floor`` = the largest fluid speed gives every particle the shift of the fastest
     one (Sun et al. 2017's Ma-scaled shift), so slow regions (stagnation points) are
     regularised too.  A non-empty ``speed`` (one entry per particle) replaces |v_i|: the
-    Galilean-invariant strain speed of :func:`strain_speed`."""
+    Galilean-invariant strain speed of :func:`strain_speed`.  (:func:`shift_displacement`
+    then :func:`apply_shift`.)"""
+    dr = np.zeros_like(x)
+    shift_displacement(x, v, kind, gc, nrm, near, coef, dt, max_shift, project_surface,
+                       v_floor, speed, dr)
+    apply_shift(x, rho, grad_rho, dr, max_shift, out)
+
+
+@njit(cache=True, parallel=True)
+def shift_displacement(x, v, kind, gc, nrm, near, coef, dt, max_shift, project_surface,
+                       v_floor, speed, dr):
+    """dr_i of :func:`shift` (0 on the particles it leaves alone), capped at ``max_shift``."""
     n, dim = x.shape
     own = speed.shape[0] == 0
     for i in prange(n):
-        out[i] = 0.0
+        for k in range(dim):
+            dr[i, k] = 0.0
         if kind[i] != FLUID:
             continue
         if near[i] and not project_surface:
@@ -228,29 +240,83 @@ def shift(x, v, rho, kind, gc, nrm, near, grad_rho, coef, dt, max_shift, project
         else:
             sp = speed[i]
         D = coef * max(sp, v_floor) * dt
-        dr = np.zeros(3)
         for k in range(dim):
-            dr[k] = -D * gc[i, k]
+            dr[i, k] = -D * gc[i, k]
         if near[i]:
             pn = 0.0
             for k in range(dim):
-                pn += dr[k] * nrm[i, k]
+                pn += dr[i, k] * nrm[i, k]
             for k in range(dim):
-                dr[k] -= pn * nrm[i, k]
+                dr[i, k] -= pn * nrm[i, k]
         L = 0.0
         for k in range(dim):
-            L += dr[k] * dr[k]
+            L += dr[i, k] * dr[i, k]
         L = np.sqrt(L)
         if L > max_shift:
             for k in range(dim):
-                dr[k] *= max_shift / L
-            L = max_shift
+                dr[i, k] *= max_shift / L
+
+
+@njit(cache=True, parallel=True)
+def apply_shift(x, rho, grad_rho, dr, max_shift, out):
+    """x_i += dr_i (|dr_i| capped at ``max_shift``), rho_i += grad rho_i . dr_i (the density
+    interpolated to the new place), ``out[i]`` = |dr_i|; rows of ``x``."""
+    n, dim = x.shape
+    for i in prange(n):
+        L = 0.0
+        for k in range(dim):
+            L += dr[i, k] * dr[i, k]
+        L = np.sqrt(L)
+        f = max_shift / L if L > max_shift else 1.0
         drho = 0.0
         for k in range(dim):
-            x[i, k] += dr[k]
-            drho += grad_rho[i, k] * dr[k]
+            x[i, k] += f * dr[i, k]
+            drho += grad_rho[i, k] * f * dr[i, k]
         rho[i] += drho
-        out[i] = L
+        out[i] = f * L
+
+
+@njit(cache=True, parallel=True)
+def remove_local_mean(dr, x, liquid, offsets, indices, Rp, kcode, period, n, out):
+    """out_i = dr_i - <dr>_i for the rows i < ``n`` with a nonzero dr_i, <dr>_i = sum_j w_ij
+    dr_j / sum_j w_ij the kernel-weighted mean over i itself and its ``liquid`` neighbours
+    j within the pair support (R_i + R_j) / 2 (w = the kernel's shape f(d / R_ij); rows of
+    ``dr``, ``x``, ``liquid`` and ``Rp`` over the listed set, mirrors included; ``period``:
+    0 on open axes).  The shift then only rearranges the particles among their neighbours:
+    a displacement shared by a whole neighbourhood, such as the drift of a thin film's
+    particles towards its end along grad C, is taken out (``[fluid] shifting_drift =
+    "removed"``)."""
+    dim = x.shape[1]
+    periodic = False
+    for k in range(dim):
+        periodic |= period[k] > 0.0
+    w0 = kernels.kernel_f(0.0, kcode)
+    for i in prange(n):
+        nz = False
+        for k in range(dim):
+            out[i, k] = dr[i, k]
+            nz |= dr[i, k] != 0.0
+        if not nz:
+            continue
+        s = np.zeros(3)
+        for k in range(dim):
+            s[k] = w0 * dr[i, k]
+        sw = w0
+        for jj in range(offsets[i], offsets[i + 1]):
+            j = indices[jj]
+            if j == i or not liquid[j]:
+                continue
+            r0, r1, r2 = pair_sep(x, i, j, dim, period, periodic)
+            d = math.sqrt(r0 * r0 + r1 * r1 + r2 * r2)
+            R = 0.5 * (Rp[i] + Rp[j])
+            if d >= R:
+                continue
+            w = kernels.kernel_f(d / R, kcode)
+            for k in range(dim):
+                s[k] += w * dr[j, k]
+            sw += w
+        for k in range(dim):
+            out[i, k] = dr[i, k] - s[k] / sw
 
 
 #: the ``speed`` of :func:`shift` that selects each particle's own |v_i|

@@ -513,12 +513,22 @@ class FluidSolver:
         self.pressure_method.advance(self, dt)
         p, s = self.p, self._scratch
         t0 = time.perf_counter()
-        if self.params.shifting != "none":
-            surface.shift(p.x, p.v, p.rho, p.kind, s.gc, s.nrm, s.near, s.grad,
-                          self.params.shifting_coef * self.h, dt, 0.1 * self.h,
-                          self.params.shifting == "all", s.shift,
-                          surface.shift_floor_speed(p.v, p.kind, self.params.shifting_speed),
-                          surface.OWN_SPEED)
+        pa = self.params
+        if pa.shifting != "none":
+            dr = np.zeros_like(p.x)
+            surface.shift_displacement(p.x, p.v, p.kind, s.gc, s.nrm, s.near,
+                                       pa.shifting_coef * self.h, dt, 0.1 * self.h,
+                                       pa.shifting == "all",
+                                       surface.shift_floor_speed(p.v, p.kind,
+                                                                 pa.shifting_speed),
+                                       surface.OWN_SPEED, dr)
+            if pa.shifting_drift == "removed":
+                nl = self.nbrs
+                dr0, dr = dr, np.empty_like(dr)
+                surface.remove_local_mean(dr0, p.x, p.kind == FLUID, nl.offsets, nl.indices,
+                                          np.full(p.n, self.R), self.kernel_code,
+                                          self.period, p.n, dr)
+            surface.apply_shift(p.x, p.rho, s.grad, dr, 0.1 * self.h, s.shift)
             self.max_shift = max(self.max_shift, float(s.shift.max()))
         self.wall["integrate"] += time.perf_counter() - t0
         self.t += dt
