@@ -704,7 +704,7 @@ def test_shift_drift_removed_in_a_lamella():
         res[drift] = ((M * d[:, 0]).sum() / M.sum(), np.abs(d).max())
         assert np.array_equal(f.M, M)
     kept, removed = res["kept"], res["removed"]
-    # measured: mean radial shift 1.0e-3 dx kept, 1.4e-5 dx removed; largest 0.064 / 0.043 dx
+    # measured: mean radial shift 1.0e-3 dx kept, 2.0e-5 dx removed; largest 0.064 / 0.058 dx
     assert kept[0] > 1e-4 * dx
     assert abs(removed[0]) < 0.1 * kept[0]
     assert removed[1] > 0.5 * kept[1]

@@ -278,30 +278,27 @@ def apply_shift(x, rho, grad_rho, dr, max_shift, out):
 
 @njit(cache=True, parallel=True)
 def remove_local_mean(dr, x, liquid, offsets, indices, Rp, kcode, period, n, out):
-    """out_i = dr_i - <dr>_i for the rows i < ``n`` with a nonzero dr_i, <dr>_i = sum_j w_ij
-    dr_j / sum_j w_ij the kernel-weighted mean over i itself and its ``liquid`` neighbours
-    j within the pair support (R_i + R_j) / 2 (w = the kernel's shape f(d / R_ij); rows of
-    ``dr``, ``x``, ``liquid`` and ``Rp`` over the listed set, mirrors included; ``period``:
-    0 on open axes).  The shift then only rearranges the particles among their neighbours:
-    a displacement shared by a whole neighbourhood, such as the drift of a thin film's
-    particles towards its end along grad C, is taken out (``[fluid] shifting_drift =
+    """out_i = dr_i - <dr>_i for the ``liquid`` rows i < ``n`` (those the shift left alone,
+    dr_i = 0, included: they move against their neighbourhood's drift), <dr>_i = sum_j w_ij
+    dr_j / sum_j w_ij the kernel-weighted mean over the ``liquid`` neighbours j != i within
+    the pair support (R_i + R_j) / 2 (w = the kernel's shape f(d / R_ij); i itself is left
+    out, so a particle-scale disorder keeps its whole shift; no neighbour: dr_i kept).
+    Rows of ``dr``, ``x``, ``liquid`` and ``Rp`` run over the listed set, mirrors included;
+    ``period``: 0 on open axes.  The shift then only rearranges the particles among their
+    neighbours: a displacement shared by a whole neighbourhood, such as the drift of a thin
+    film's particles towards its end along grad C, is taken out (``[fluid] shifting_drift =
     "removed"``)."""
     dim = x.shape[1]
     periodic = False
     for k in range(dim):
         periodic |= period[k] > 0.0
-    w0 = kernels.kernel_f(0.0, kcode)
     for i in prange(n):
-        nz = False
         for k in range(dim):
             out[i, k] = dr[i, k]
-            nz |= dr[i, k] != 0.0
-        if not nz:
+        if not liquid[i]:
             continue
         s = np.zeros(3)
-        for k in range(dim):
-            s[k] = w0 * dr[i, k]
-        sw = w0
+        sw = 0.0
         for jj in range(offsets[i], offsets[i + 1]):
             j = indices[jj]
             if j == i or not liquid[j]:
@@ -315,8 +312,9 @@ def remove_local_mean(dr, x, liquid, offsets, indices, Rp, kcode, period, n, out
             for k in range(dim):
                 s[k] += w * dr[j, k]
             sw += w
-        for k in range(dim):
-            out[i, k] = dr[i, k] - s[k] / sw
+        if sw > 0.0:
+            for k in range(dim):
+                out[i, k] = dr[i, k] - s[k] / sw
 
 
 #: the ``speed`` of :func:`shift` that selects each particle's own |v_i|
