@@ -713,6 +713,33 @@ def test_shift_drift_removed_in_a_lamella():
                           3 * dx, pa, shift_drift="none")
 
 
+def test_shift_drift_removed_moves_fragments_but_keeps_their_density():
+    """With ``shift_drift = "removed"`` the fragments (a one-ring filament off a lamella's
+    end, lambda <= 0.2: not shifted by the plain law) move against their neighbourhood's
+    drift but keep their density (their unrenormalised grad rho is no slope), while the
+    shifted rings of the film take rho += grad rho . dr."""
+    dx = 1e-3
+    rows = [((i + 0.5) * dx, (j + 0.5) * dx) for i in range(20, 40) for j in range(4)]
+    rows += [((40 + i + 0.5) * dx, 0.5 * dx) for i in range(4)]  # the filament
+    x0 = np.array(rows)
+    x0 += np.random.default_rng(7).uniform(-0.1, 0.1, x0.shape) * dx
+    n = len(x0)
+    M = ring_mass(x0[:, 0], 1000.0, dx * dx)
+    rho = 1000.0 * (1.0 + 0.001 * x0[:, 0] / dx)
+    pa = FluidParams(rho0=1000.0, c0=10.0, mu=0.0, delta=0.0, alpha=0.0)
+    v = np.zeros_like(x0)
+    v[:, 0] = 1.0
+    f = AxisymmetricFluid(x0, v, rho, np.full(n, FLUID, np.int8), M, dx * dx, 3 * dx, pa,
+                          shifting=5.0 / 3.0, shift_drift="removed")
+    frag = f.lam <= f.renorm_lambda_min
+    assert frag.sum() >= 2
+    f._shift(0.2 * dx)
+    moved = np.linalg.norm(f.x - x0, axis=1)
+    assert moved[frag].max() > 1e-3 * dx  # those next to the film; the far end has no
+    assert np.array_equal(f.rho[frag], rho[frag])  # shifted neighbour and stays
+    assert np.abs(f.rho[~frag] - rho[~frag]).max() > 0.0
+
+
 def test_shift_surface_lambda_frees_the_rows_below_the_surface():
     """``shift_surface_lambda`` (``[fluid] shifting_surface_lambda``): rows with lambda
     below it are shifted along the surface only; lowering it from 0.75 to 0.5 leaves the

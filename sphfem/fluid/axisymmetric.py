@@ -1188,7 +1188,8 @@ class AxisymmetricFluid:
         rings towards an even planar cover sum_j A_j W_ij = 1 (the areas, not the spacing,
         are evened out).  With ``shift_drift = "removed"`` each ring's shift less the
         kernel-weighted mean of its neighbourhood's (axis and wall mirrors' shifts mirrored;
-        :func:`sphfem.fluid.surface.remove_local_mean`) is applied."""
+        :func:`sphfem.fluid.surface.remove_local_mean`) is applied; fragments then move
+        too (against the drift) but keep their density."""
         from sphfem.fluid.surface import (
             OWN_SPEED,
             apply_shift,
@@ -1227,7 +1228,13 @@ class AxisymmetricFluid:
             remove_local_mean(dra, xa, (ka == FLUID) | (ka == MIRROR_FLUID), nl.offsets,
                               nl.indices, a["Rp"], self.kcode, np.array([0.0, self.Lz]), n,
                               dr)
-        apply_shift(self.x, self.rho, a["grad_rho"][:n], dr, 0.1 * hmin, out)
+        grad_rho = a["grad_rho"][:n]
+        if self.shift_drift == "removed":
+            # fragments (kind WALL above) move against their neighbourhood's drift but keep
+            # their density: their unrenormalised grad rho is no Taylor slope (it drove a
+            # density negative at D/dx 128)
+            grad_rho = np.where((kind != self.kind)[:, None], 0.0, grad_rho)
+        apply_shift(self.x, self.rho, grad_rho, dr, 0.1 * hmin, out)
         self.last_shift = float(out.max() / hmin)
 
     def _reflect(self) -> None:
