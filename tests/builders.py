@@ -128,3 +128,15 @@ def load_example(path, name: str):
     mod = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(mod)
     return mod
+
+
+def as_planar_scene(d: dict) -> dict:
+    """An axisymmetric scene dict (``sphfem.validation.droplet_impact.scene_at``) turned into
+    the planar (x, y) scene of its (r, z) section: geometry cartesian, the domain and the
+    walls mirrored to -r (in place; returned)."""
+    d["scene"]["geometry"] = "cartesian"
+    d["domain"]["lo"][0] = -d["domain"]["hi"][0]
+    for b in d["blocks"]:
+        if b["kind"] == "wall":
+            b["lo"][0] = -b["hi"][0]
+    return d

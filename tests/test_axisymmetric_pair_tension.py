@@ -103,6 +103,8 @@ def test_scene_key_reaches_the_solver_and_bad_combinations_are_refused(tmp_path)
     """``[fluid] csf_meridian = "pair"`` reaches the axisymmetric CSF (a short coarse impact
     runs with it); with film_tension, or on a planar scene, the scene is refused naming the
     key."""
+    from builders import as_planar_scene
+
     from sphfem.api import run
     from sphfem.errors import SceneError
     from sphfem.scene import parse_scene
@@ -122,10 +124,6 @@ def test_scene_key_reaches_the_solver_and_bad_combinations_are_refused(tmp_path)
                     source="test")
     d = di.scene_at(10.0, 8, 0.02, overrides=["fluid.csf_meridian=pair",
                                               "fluid.wall_friction=sph"])
-    d["scene"]["geometry"] = "cartesian"  # the (r, z) section as a planar (x, y) scene
-    d["domain"]["lo"][0] = -d["domain"]["hi"][0]
-    for b in d["blocks"]:
-        if b["kind"] == "wall":
-            b["lo"][0] = -b["hi"][0]
+    as_planar_scene(d)  # the (r, z) section as a planar (x, y) scene
     with pytest.raises(SceneError, match="csf_meridian"):
         parse_scene(d, source="test")

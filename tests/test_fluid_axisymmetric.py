@@ -657,6 +657,8 @@ def test_wall_layer_sees_the_lamella_stretching():
 def test_shifting_speed_strain_scene_key():
     """``[fluid] shifting_speed = "strain"`` is accepted on an axisymmetric scene; a planar
     scene with it is refused naming the key."""
+    from builders import as_planar_scene
+
     from sphfem.errors import SceneError
     from sphfem.scene import parse_scene
     from sphfem.validation import droplet_impact as di
@@ -666,11 +668,7 @@ def test_shifting_speed_strain_scene_key():
     assert scene.fluid.shifting_speed == "strain"
     d = di.scene_at(10.0, 8, 0.02, overrides=["fluid.shifting_speed=strain",
                                               "fluid.wall_friction=sph"])
-    d["scene"]["geometry"] = "cartesian"  # the (r, z) section as a planar (x, y) scene
-    d["domain"]["lo"][0] = -d["domain"]["hi"][0]
-    for b in d["blocks"]:
-        if b["kind"] == "wall":
-            b["lo"][0] = -b["hi"][0]
+    as_planar_scene(d)  # the (r, z) section as a planar (x, y) scene
     with pytest.raises(SceneError, match="shifting_speed"):
         parse_scene(d, source="test")
 

@@ -535,7 +535,7 @@ def _mirror_positions(n, src, mtype, zw, x):
 
 @njit(cache=True)
 def _shift_inputs(gc, B, lam, kind, Rp, lam_min, gcs, nrm, near, kind_out, lam_near=0.75):
-    """The per-row inputs of :func:`sphfem.fluid.surface.shift` for
+    """The per-row inputs of :func:`sphfem.fluid.surface.shift_displacement` for
     :meth:`AxisymmetricFluid._shift` (rows of ``gc``): the outward normal -b / |b|, b = B
     grad C (-b where |b| = 0), ``near`` = lambda < ``lam_near`` and not a fragment (lambda
     <= ``lam_min``), grad C h_i / h_max, fragments' kind set to WALL (no shift).  Returns
@@ -1031,8 +1031,9 @@ class AxisymmetricFluid:
                self._alpha_c(x, Rp),
                0.0 if self.planar else 1.0, Bm, qh, not self.fragment_hoop, fw,
                wall_art, acc, drho, gradv, prr, *pc[1:])
-        #: the renormalised velocity gradient (L00, L01, L10, L11) of the real rows
-        self.gradv = gradv[:n].copy()
+        #: the renormalised velocity gradient (L00, L01, L10, L11) of the real rows (a view
+        #: of this evaluation's array)
+        self.gradv = gradv[:n]
         if self.wall_friction == "layer":
             self._layer_inputs(x, kind, nl, Rp, src, mtype, gradv, qh)
         if self.csf is not None:  # CSF over the fluid's widest support (adaptive_h)
@@ -1220,6 +1221,7 @@ class AxisymmetricFluid:
         shift_displacement(self.x, self.v, kind, gcs, nrm, near, self.shifting * hmax, dt,
                            0.1 * hmin, self.shift_surface,
                            shift_floor_speed(self.v, self.kind, self.shift_speed), speed, dr)
+        grad_rho = a["grad_rho"][:n]
         if self.shift_drift == "removed":  # over the listed rows, the mirrors' shifts mirrored
             xa, ka, nl = a["x"], a["kind"], a["nbrs"]
             dra = np.zeros_like(xa)
@@ -1228,8 +1230,6 @@ class AxisymmetricFluid:
             remove_local_mean(dra, xa, (ka == FLUID) | (ka == MIRROR_FLUID), nl.offsets,
                               nl.indices, a["Rp"], self.kcode, np.array([0.0, self.Lz]), n,
                               dr)
-        grad_rho = a["grad_rho"][:n]
-        if self.shift_drift == "removed":
             # fragments (kind WALL above) move against their neighbourhood's drift but keep
             # their density: their unrenormalised grad rho is no Taylor slope (it drove a
             # density negative at D/dx 128)

@@ -203,26 +203,16 @@ def near_surface(kind, offsets, indices, flag, x, R, period, near):
                 break
 
 
-def shift(x, v, rho, kind, gc, nrm, near, grad_rho, coef, dt, max_shift, project_surface,
-          out, v_floor, speed):
-    """Apply dr = -coef max(|v|, ``v_floor``) dt grad C (projected on the tangent plane
-    where ``near`` when ``project_surface``, skipped there otherwise), capped at
-    ``max_shift``; the density follows with grad rho . dr.  ``out[i]`` receives |dr|.
-    ``v_floor`` = the largest fluid speed gives every particle the shift of the fastest
-    one (Sun et al. 2017's Ma-scaled shift), so slow regions (stagnation points) are
-    regularised too.  A non-empty ``speed`` (one entry per particle) replaces |v_i|: the
-    Galilean-invariant strain speed of :func:`strain_speed`.  (:func:`shift_displacement`
-    then :func:`apply_shift`.)"""
-    dr = np.zeros_like(x)
-    shift_displacement(x, v, kind, gc, nrm, near, coef, dt, max_shift, project_surface,
-                       v_floor, speed, dr)
-    apply_shift(x, rho, grad_rho, dr, max_shift, out)
-
-
 @njit(cache=True, parallel=True)
 def shift_displacement(x, v, kind, gc, nrm, near, coef, dt, max_shift, project_surface,
                        v_floor, speed, dr):
-    """dr_i of :func:`shift` (0 on the particles it leaves alone), capped at ``max_shift``."""
+    """The particle shift dr = -coef max(|v|, ``v_floor``) dt grad C into ``dr`` (projected
+    on the tangent plane where ``near`` when ``project_surface``, 0 there otherwise; 0 on
+    non-fluid rows), capped at ``max_shift``; :func:`apply_shift` moves the particles.
+    ``v_floor`` = the largest fluid speed gives every particle the shift of the fastest
+    one (Sun et al. 2017's Ma-scaled shift), so slow regions (stagnation points) are
+    regularised too.  A non-empty ``speed`` (one entry per particle) replaces |v_i|: the
+    Galilean-invariant strain speed of :func:`strain_speed`."""
     n, dim = x.shape
     own = speed.shape[0] == 0
     for i in prange(n):
@@ -317,7 +307,7 @@ def remove_local_mean(dr, x, liquid, offsets, indices, Rp, kcode, period, n, out
                 out[i, k] = dr[i, k] - s[k] / sw
 
 
-#: the ``speed`` of :func:`shift` that selects each particle's own |v_i|
+#: the ``speed`` of :func:`shift_displacement` that selects each particle's own |v_i|
 OWN_SPEED = np.empty(0)
 
 
@@ -335,7 +325,7 @@ def strain_speed(h, L, out):
 
 
 def shift_floor_speed(v, kind, mode: str) -> float:
-    """The ``v_floor`` of :func:`shift` for the scene key ``[fluid] shifting_speed``:
+    """The ``v_floor`` of :func:`shift_displacement` for the scene key ``[fluid] shifting_speed``:
     0 for "local" (each particle's own |v|) and "strain" (:func:`strain_speed`), the
     largest fluid speed for "max"."""
     if mode in ("local", "strain"):
