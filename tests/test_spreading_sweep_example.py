@@ -4,6 +4,7 @@
 from __future__ import annotations
 
 import importlib.util
+import json
 from pathlib import Path
 
 import pytest
@@ -139,3 +140,23 @@ def test_convergence_of_the_ensemble_means(study):
     gci = 1.25 * (100.0 / 64**2 - est) / 3.0
     assert cells[6] == f"{(est + gci + 0.1) / 3.0:.1%}"
     assert study.convergence_lines({(30.0, 1000.0, 32): [3.0]}) == []
+
+
+def test_a_run_cut_off_midway_continues_from_its_checkpoint(study, tmp_path):
+    """A run folder holding a checkpoint (the run was stopped) is continued, not restarted:
+    the record's end time is the case's and it says so."""
+    from sphfem.api import run
+
+    d = study.scene_for(30.0, 100.0, 8, 0.2)
+    name = "We30_Re100_n8"
+    run(parse_scene(d, source=name), tmp_path / name, keep_checkpoint=True)
+    t_cut = json.loads((tmp_path / name / "summary.json").read_text())["t"]
+    rec = study.run_case(30.0, 100.0, 8, 0.4, tmp_path)
+    assert rec["resumed"] is True
+    assert rec["t_end_tc"] == pytest.approx(0.4, rel=1e-3)
+    assert t_cut == pytest.approx(0.2 * 1e-4 / study.SPEED, rel=1e-3)
+    assert rec["spread"] > 0.0
+    rec2 = study.run_case(30.0, 100.0, 8, 0.4, tmp_path / "fresh")
+    assert rec2["resumed"] is False
+    # the same run cut or not, up to the step sequence (the cut run stepped onto t_cut)
+    assert rec2["spread"] == pytest.approx(rec["spread"], rel=1e-2)

@@ -26,8 +26,10 @@ correlations at the same (We, Re) and a 90 degree contact angle
 Kwok 2005, Clanet et al. 2004, Roisman 2009, Laan et al. 2014).
 
 One JSON per run (``DIR/We<We>_Re<Re>_n<n>.json``; an existing one is kept, so an
-interrupted study resumes).  ``--report FOLDER`` writes ``results.json``, ``table.md`` and
-``spreading.png`` (D_max / D against Re, one colour per We, the correlations' band shaded).
+interrupted study resumes; a run cut off mid-way continues from its folder's last
+checkpoint, its ``wall_s`` then that of the continuation only).  ``--report FOLDER``
+writes ``results.json``, ``table.md`` and ``spreading.png`` (D_max / D against Re, one
+colour per We, the correlations' band shaded).
 """
 
 from __future__ import annotations
@@ -115,7 +117,9 @@ def run_case(We: float, Re: float, n: int, t_end_tc: float, out: Path,
     t0 = time.perf_counter()
     scene = parse_scene(scene_for(We, Re, n, t_end_tc, overrides, member),
                         source=path.stem)
-    run(scene, folder, overwrite=True)
+    # a run cut off mid-way continues from its last checkpoint (one per frame)
+    resumed = (folder / "checkpoint.npz").exists()
+    run(scene, folder, overwrite=not resumed, resume=resumed)
     s = json.loads((folder / "summary.json").read_text())
     sp = s["diagnostics"]["fluid"]["spreading"]
     drop = next(b for b in scene.blocks if b.kind == "fluid")
@@ -131,7 +135,8 @@ def run_case(We: float, Re: float, n: int, t_end_tc: float, out: Path,
            "film_particles": s["diagnostics"]["fluid"].get("residual_film", {}).get(
                "particles_across"),
            "correlations": band, "overrides": list(overrides), "tag": tag,
-           "member": member,
+           "member": member, "resumed": resumed,
+           # of this process only when resumed
            "wall_s": time.perf_counter() - t0}
     from sphfem.output import atomic_write_text
 
