@@ -247,6 +247,12 @@ class AxisymmetricFluidModule(PhysicsModule):
     fluid_options = {"adaptive_h": False, "wall_tension": False,
                      "free_surface_no_tension": True, "fragment_hoop": False,
                      "csf_axis_curvature": True, "csf_curvature_smoothing": 2.0}
+    #: rings are kept at r >= AXIS_FLOOR_DX dx (the fluid's spacing; the lattice's first
+    #: column sits at dx / 2): next to the axis a ring's meridian area grows as 1 / r and its
+    #: mirror hardly repels it; without the floor the apex ring of the 10 m/s droplet at
+    #: D/dx 181 reached r = 0.12 dx and the run blew up at 0.98 t_c
+    #: (:mod:`sphfem.fluid.axisymmetric`, "Axis"; docs/validation/droplet_impact, session 21)
+    AXIS_FLOOR_DX = 0.25
     #: Verlet skin of the fluid's (and the heat's) neighbour list, as a fraction of R: the
     #: list reaches R (1 + SKIN) and is rebuilt only when a ring has moved R SKIN / 2.
     #: Every pair kernel skips pairs beyond its support and list rows are sorted by index,
@@ -304,6 +310,7 @@ class AxisymmetricFluidModule(PhysicsModule):
         x = ps.x[idx]
         A = ring_areas(ps)[idx]
         nrm = box_wall_normals(self.scene, x, kind)
+        dxf = [b.dx or self.scene.sph.dx for b in self.scene.blocks if b.kind == "fluid"]
         self.solver = AxisymmetricFluid(
             x, ps.v[idx], ps.rho[idx], kind, np.where(kind == FLUID, ps.m[idx], 0.0), A,
             ctx.R, self.params, kernel=self.scene.sph.kernel,
@@ -316,6 +323,7 @@ class AxisymmetricFluidModule(PhysicsModule):
             shift_drift=self.params.shifting_drift,
             wall_friction=self.scene.fluid.wall_friction,
             film_tension=self.scene.fluid.film_tension,
+            axis_floor=self.AXIS_FLOOR_DX * float(dxf[0]),
             **self._options())
         self.nrm = nrm
         wl = np.flatnonzero(kind == WALL)
@@ -324,7 +332,6 @@ class AxisymmetricFluidModule(PhysicsModule):
         self.correction_impulse = 0.0
         # h_i ~ sqrt(A_i / a_ref): a_ref the lattice's meridian area dx^2 (the median of the
         # areas at t = 0), not the median at this init, so a resumed run takes the same
-        dxf = [b.dx or self.scene.sph.dx for b in self.scene.blocks if b.kind == "fluid"]
         self.solver.a_ref = float(dxf[0]) ** 2
         self.solver.evaluate()
         self.solver.t = ctx.t

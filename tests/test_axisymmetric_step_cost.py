@@ -122,7 +122,7 @@ def test_step_kernels_equal_the_numpy_updates_bitwise():
     below = fl & (X[:, 1] < zw)
     X[below, 1] = 2.0 * zw - X[below, 1]
     V[below, 1] *= -1.0
-    _reflect_axis(fi, x2, v2, True, zw)
+    _reflect_axis(fi, x2, v2, True, zw, 0.0)
     assert neg.any() and below.any()
     assert np.array_equal(X, x2) and np.array_equal(V, v2)
     # the shifting's inputs (AxisymmetricFluid._shift before)

@@ -858,3 +858,46 @@ def test_axis_alpha_raises_the_artificial_viscosity_next_to_the_axis_only():
     with pytest.raises(ValueError, match="axis_alpha"):
         AxisymmetricFluid(x, np.zeros_like(x), np.full(len(x), 1000.0), kind, M, dx * dx, R,
                           pa, axis_alpha=-1.0)
+
+
+def test_reflect_axis_keeps_rows_above_the_floor():
+    """_reflect_axis: r < 0 mirrored across the axis, then r < r_f across r = r_f with an
+    inward v_r reversed (an outward one kept); rows above the floor untouched."""
+    from sphfem.fluid.axisymmetric import _reflect_axis
+
+    x = np.array([[-0.1, 0.0], [0.05, 1.0], [0.1, 2.0], [0.3, 3.0]])
+    v = np.array([[2.0, 1.0], [-3.0, 1.0], [4.0, 1.0], [-5.0, 1.0]])
+    _reflect_axis(np.arange(4), x, v, False, 0.0, 0.25)
+    np.testing.assert_allclose(x[:, 0], [0.4, 0.45, 0.4, 0.3])
+    np.testing.assert_allclose(v[:, 0], [2.0, 3.0, 4.0, -5.0])  # -2 -> (axis) -> ... -> 2
+    np.testing.assert_allclose(x[:, 1], [0.0, 1.0, 2.0, 3.0])
+    np.testing.assert_allclose(v[:, 1], 1.0)
+
+
+def test_axis_floor_lifts_a_ring_off_the_axis_and_spares_the_planar_mode():
+    """A drop at rest with one ring put at r = 0.1 dx next to the axis: after one step it
+    sits at or above the floor dx / 4 (0.4 dx, reflected) and no ring is below it; in the
+    planar mode x = 0 is a symmetry plane, not an axis, and the floor does not act."""
+    dx, R = 1.0 / 16, 3.0 / 16
+    g = (np.arange(-8, 8) + 0.5) * dx
+    rr, zz = np.meshgrid(g[g > 0], g, indexing="ij")
+    x = np.column_stack([rr.ravel(), zz.ravel()])
+    x = x[(x**2).sum(axis=1) <= 0.5**2]
+    k = int(np.argmin(np.abs(x[:, 0] - 0.5 * dx) + np.abs(x[:, 1] - 0.5 * dx)))
+    x[k, 0] = 0.1 * dx
+    pa = FluidParams(rho0=1.0, c0=10.0, mu=0.01, delta=0.1)
+    n = len(x)
+    for planar in (False, True):
+        f = AxisymmetricFluid(x, np.zeros((n, 2)), np.ones(n), np.full(n, FLUID),
+                              ring_mass(x[:, 0], 1.0, dx * dx), dx * dx, R, pa,
+                              planar=planar, axis_floor=0.25 * dx)
+        dt = 1e-3 * f.stable_dt()  # the ring moves by ~1e-9 dx: the floor alone lifts it
+        f.step(dt)
+        if planar:
+            assert f.x[k, 0] == pytest.approx(0.1 * dx, abs=1e-6 * dx)
+        else:
+            assert f.x[k, 0] == pytest.approx(0.4 * dx, abs=1e-6 * dx)
+            assert f.x[:, 0].min() >= 0.25 * dx
+    with pytest.raises(ValueError, match="axis_floor"):
+        AxisymmetricFluid(x, np.zeros((n, 2)), np.ones(n), np.full(n, FLUID),
+                          ring_mass(x[:, 0], 1.0, dx * dx), dx * dx, R, pa, axis_floor=R)

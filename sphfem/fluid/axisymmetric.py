@@ -48,8 +48,16 @@ diffusion; its hoop part (1/r) d_r rho is left out).
 Axis: mirror particles (-r, z) of all particles with r < R carry rho, p, mu, A, mt and
 (-v_r, v_z) (the ghost velocity of a mirrored wall likewise), so the planar sums near the
 axis see an even / odd continuation of the fields.  A particle that crosses the axis in a
-step is reflected (r -> -r, v_r -> -v_r).  The hoop terms use r_i itself; no particle sits
-on the axis because mirrored pairs repel (their pressure term is symmetric about r = 0).
+step is reflected (r -> -r, v_r -> -v_r).  The hoop terms use r_i itself.  A ring and its
+own mirror repel only weakly close to the axis (the kernel gradient vanishes at zero
+distance: d W / d q ~ q), while its meridian area A = M / (2 pi r rho) grows as 1 / r: a
+ring pushed onto the axis (the apex of the 10 m/s droplet at D/dx 181, r = 0.12 dx at
+0.97 t_c) carried an area ~4x the lattice's into its neighbours' divergence, their
+density ran away within ten steps (rho 1.6 rho0, p 1.6e7 Pa) and rings were thrown
+through the wall.  So a floor ``axis_floor`` (the scene module sets a quarter of the
+fluid's spacing, the lattice's first column sitting at half of it) reflects the rings
+like the axis does: r < r_f -> 2 r_f - r, an inward v_r reversed; A then stays below
+about twice the lattice's.
 
 Hoop term of the continuity (``smooth_hoop``, default): v_r / r is replaced by its Shepard
 average over the fluid and its mirrors, <v_r / r>_i = sum_j A_j W_ij (v_r / r)_j / sum_j
@@ -435,14 +443,20 @@ def _correct(fidx, x, v, rho, acc, drho, dt, h, v_n, rho_n, lam, hold, rho0):
 
 
 @njit(cache=True)
-def _reflect_axis(fidx, x, v, plane, zw):
-    """Fluid rows with r < 0 reflected across the axis (r, v_r negated); with ``plane``,
-    rows below z = ``zw`` reflected across that plane (z -> 2 zw - z, v_z negated)."""
+def _reflect_axis(fidx, x, v, plane, zw, r_floor):
+    """Fluid rows with r < 0 reflected across the axis (r, v_r negated), then rows with r <
+    ``r_floor`` across r = r_floor (r -> 2 r_floor - r, an inward v_r reversed; module
+    docstring, "Axis"); with ``plane``, rows below z = ``zw`` reflected across that plane
+    (z -> 2 zw - z, v_z negated)."""
     for q in range(fidx.shape[0]):
         i = fidx[q]
         if x[i, 0] < 0.0:
             x[i, 0] *= -1.0
             v[i, 0] *= -1.0
+        if x[i, 0] < r_floor:
+            x[i, 0] = 2.0 * r_floor - x[i, 0]
+            if v[i, 0] < 0.0:
+                v[i, 0] = -v[i, 0]
     if plane:
         for q in range(fidx.shape[0]):
             i = fidx[q]
@@ -736,7 +750,8 @@ class AxisymmetricFluid:
                  wall_friction: str = "sph", film_tension: bool = False,
                  csf_axis_curvature: bool = False, csf_curvature_smoothing: float = 1.0,
                  axis_alpha: float = 0.0, csf_meridian: str = "csf",
-                 shift_surface_lambda: float = 0.75, shift_drift: str = "kept"):
+                 shift_surface_lambda: float = 0.75, shift_drift: str = "kept",
+                 axis_floor: float = 0.0):
         self.x = np.array(x, dtype=np.float64)
         n = self.n = self.x.shape[0]
         self.v = np.array(v, dtype=np.float64).reshape(n, 2)
@@ -746,6 +761,10 @@ class AxisymmetricFluid:
             raise ValueError("axisymmetric fluid particles must be FLUID or WALL")
         if np.any(self.x[:, 0] < 0):
             raise ValueError("axisymmetric positions need r >= 0")
+        if not 0.0 <= axis_floor < float(R):
+            raise ValueError(f"axis_floor must lie in [0, R), got {axis_floor!r}")
+        #: rings are kept at r >= axis_floor [m] (module docstring, "Axis"; 0: at r >= 0)
+        self.axis_floor = float(axis_floor)
         self.M = np.broadcast_to(np.asarray(M, float), (n,)).copy()
         self.vol = np.broadcast_to(np.asarray(vol, float), (n,)).copy()
         self.params = pa = params
@@ -1241,7 +1260,8 @@ class AxisymmetricFluid:
         """Reflect the fluid at the axis and the wall plane, wrap periodic z, and hold it
         out of particle walls with normals (:mod:`sphfem.fluid.no_penetration`)."""
         _reflect_axis(self._fidx, self.x, self.v, self.wall_z is not None,
-                      0.0 if self.wall_z is None else self.wall_z)
+                      0.0 if self.wall_z is None else self.wall_z,
+                      0.0 if self.planar else self.axis_floor)
         if self.Lz:
             self.x[:, 1] = self.z0 + np.mod(self.x[:, 1] - self.z0, self.Lz)
         if self.no_penetration is not None:
