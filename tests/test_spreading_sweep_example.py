@@ -91,7 +91,10 @@ def test_ensemble_members_jitter_the_droplet_and_the_report_tabulates_them(study
     recs.append({"We": 30.0, "Re": 1000.0, "n": 87, "refined": True, "spread": 2.7,
                  "spread_t_tc": 1.4, "max_reached": True, "film_particles": 4.3,
                  "correlations": band, "wall_s": 2.0})  # an older record: no new keys
+    recs[0]["history_t_tc"], recs[0]["history_ratio"] = [0.0, 1.0, 2.0], [0.0, 2.5, 2.9]
     study.report(recs, tmp_path)
+    assert (tmp_path / "spread_history.png").exists()
+    assert study.history_plot(recs[1:], tmp_path / "none.png") is False  # no history kept
     table = (tmp_path / "table.md").read_text()
     assert "| 30 | 1000 | 61 | 3 | 3.000 | 2.900-3.100 | 6.7% |" in table
     assert "| 30 | 1000 | 87 | 0 | 4.3 | 2.70 (1.40) | - | - |" in table
@@ -153,6 +156,15 @@ def test_a_run_cut_off_midway_continues_from_its_checkpoint(study, tmp_path):
     t_cut = json.loads((tmp_path / name / "summary.json").read_text())["t"]
     rec = study.run_case(30.0, 100.0, 8, 0.4, tmp_path)
     assert rec["resumed"] is True
+    assert len(rec["history_ratio"]) == len(rec["history_t_tc"]) > 0
+    assert rec["history_t_tc"][-1] == pytest.approx(0.4, rel=0.05)
+    # a record written before the history was kept takes it from its run's summary
+    path = tmp_path / (name + ".json")
+    old = {k: v for k, v in json.loads(path.read_text()).items() if "history" not in k}
+    path.write_text(json.dumps(old))
+    back = study.run_case(30.0, 100.0, 8, 0.4, tmp_path)
+    assert back["history_ratio"] == rec["history_ratio"]
+    assert back["history_t_tc"] == pytest.approx(rec["history_t_tc"])
     assert rec["t_end_tc"] == pytest.approx(0.4, rel=1e-3)
     assert t_cut == pytest.approx(0.2 * 1e-4 / study.SPEED, rel=1e-3)
     assert rec["spread"] > 0.0

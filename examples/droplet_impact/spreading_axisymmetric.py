@@ -28,8 +28,9 @@ Kwok 2005, Clanet et al. 2004, Roisman 2009, Laan et al. 2014).
 One JSON per run (``DIR/We<We>_Re<Re>_n<n>.json``; an existing one is kept, so an
 interrupted study resumes; a run cut off mid-way continues from its folder's last
 checkpoint, its ``wall_s`` then that of the continuation only).  ``--report FOLDER``
-writes ``results.json``, ``table.md`` and ``spreading.png`` (D_max / D against Re, one
-colour per We, the correlations' band shaded).
+writes ``results.json``, ``table.md``, ``spreading.png`` (D_max / D against Re, one
+colour per We, the correlations' band shaded) and ``spread_history.png`` (the contact
+diameter against time, one line per run).
 """
 
 from __future__ import annotations
@@ -111,9 +112,17 @@ def run_case(We: float, Re: float, n: int, t_end_tc: float, out: Path,
     tag = override_tag(overrides) if tag is None else tag
     path = out / (f"We{We:g}_Re{Re:g}_n{n}" + (f"_{tag}" if tag else "")
                   + (f"_m{member}" if member else "") + ".json")
-    if path.exists():
-        return json.loads(path.read_text())
     folder = out / path.stem
+    if path.exists():
+        rec = json.loads(path.read_text())
+        summary = folder / "summary.json"
+        if "history_ratio" not in rec and summary.exists():  # a record from before it was kept
+            s = json.loads(summary.read_text())
+            sp = s["diagnostics"]["fluid"]["spreading"]
+            tc = s["t"] / rec["t_end_tc"]
+            rec["history_t_tc"] = [t / tc for t in sp.get("history_t_s", [])]
+            rec["history_ratio"] = list(sp.get("history_ratio", []))
+        return rec
     t0 = time.perf_counter()
     scene = parse_scene(scene_for(We, Re, n, t_end_tc, overrides, member),
                         source=path.stem)
@@ -136,6 +145,9 @@ def run_case(We: float, Re: float, n: int, t_end_tc: float, out: Path,
                "particles_across"),
            "correlations": band, "overrides": list(overrides), "tag": tag,
            "member": member, "resumed": resumed,
+           # the contact diameter's history (the run's samples, up to 200)
+           "history_t_tc": [t / tc for t in sp.get("history_t_s", [])],
+           "history_ratio": list(sp.get("history_ratio", [])),
            # of this process only when resumed
            "wall_s": time.perf_counter() - t0}
     from sphfem.output import atomic_write_text
@@ -266,6 +278,45 @@ def report(records: list[dict], folder: Path) -> None:
     fig.tight_layout()
     fig.savefig(folder / "spreading.png", dpi=120)
     plt.close(fig)
+    history_plot(records, folder / "spread_history.png")
+
+
+def history_plot(records: list[dict], path: Path) -> bool:
+    """D(t) / D against t / t_c, one panel per (We, Re), one colour per level, one line per
+    member (records without a history, from before it was kept, are left out); False when
+    no record has one."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    from sphfem.fluid.spreading import correlation_table
+
+    recs = [r for r in records if r.get("history_ratio")]
+    if not recs:
+        return False
+    cases = sorted({(r["We"], r["Re"]) for r in recs})
+    fig, axs = plt.subplots(1, len(cases), figsize=(5.5 * len(cases), 4.2), squeeze=False)
+    for ax, (We, Re) in zip(axs[0], cases, strict=True):
+        mine = [r for r in recs if (r["We"], r["Re"]) == (We, Re)]
+        levels = sorted({r["n"] for r in mine})
+        for r in sorted(mine, key=lambda r: (r["n"], r.get("member", 0))):
+            k = levels.index(r["n"])
+            first = r.get("member", 0) == min(q.get("member", 0) for q in mine
+                                              if q["n"] == r["n"])
+            ax.plot(r["history_t_tc"], r["history_ratio"], color=f"C{k}", lw=1.0,
+                    alpha=0.8, label=f"D/dx {r['n']}" if first else None)
+        b = correlation_table(We, Re, 90.0).values()
+        ax.axhspan(min(b), max(b), color="0.5", alpha=0.2, lw=0,
+                   label="correlations' D_max (90 deg)")
+        ax.set_xlabel("t / t_c")
+        ax.set_ylabel("contact diameter / D")
+        ax.set_title(f"We {We:g}, Re {Re:g}: one line per run", fontsize=10)
+        ax.legend(fontsize=8)
+    fig.tight_layout()
+    fig.savefig(path, dpi=120)
+    plt.close(fig)
+    return True
 
 
 def main(argv=None) -> int:
