@@ -99,6 +99,13 @@ def override_tag(overrides) -> str:
                     for p in parts)
 
 
+def _history(sp: dict, tc: float) -> dict:
+    """The contact diameter's history (the run's samples, up to 200) from a summary's
+    spreading record ``sp``: times in t_c = ``tc`` and D(t) / D."""
+    return {"history_t_tc": [t / tc for t in sp.get("history_t_s", [])],
+            "history_ratio": list(sp.get("history_ratio", []))}
+
+
 def run_case(We: float, Re: float, n: int, t_end_tc: float, out: Path,
              refined: bool = False, overrides=(), tag: str | None = None,
              member: int = 0) -> dict:
@@ -119,9 +126,7 @@ def run_case(We: float, Re: float, n: int, t_end_tc: float, out: Path,
         if "history_ratio" not in rec and summary.exists():  # a record from before it was kept
             s = json.loads(summary.read_text())
             sp = s["diagnostics"]["fluid"]["spreading"]
-            tc = s["t"] / rec["t_end_tc"]
-            rec["history_t_tc"] = [t / tc for t in sp.get("history_t_s", [])]
-            rec["history_ratio"] = list(sp.get("history_ratio", []))
+            rec.update(_history(sp, s["t"] / rec["t_end_tc"]))
         return rec
     t0 = time.perf_counter()
     scene = parse_scene(scene_for(We, Re, n, t_end_tc, overrides, member),
@@ -145,9 +150,7 @@ def run_case(We: float, Re: float, n: int, t_end_tc: float, out: Path,
                "particles_across"),
            "correlations": band, "overrides": list(overrides), "tag": tag,
            "member": member, "resumed": resumed,
-           # the contact diameter's history (the run's samples, up to 200)
-           "history_t_tc": [t / tc for t in sp.get("history_t_s", [])],
-           "history_ratio": list(sp.get("history_ratio", [])),
+           **_history(sp, tc),
            # of this process only when resumed
            "wall_s": time.perf_counter() - t0}
     from sphfem.output import atomic_write_text

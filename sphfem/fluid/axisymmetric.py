@@ -763,8 +763,6 @@ class AxisymmetricFluid:
             raise ValueError("axisymmetric positions need r >= 0")
         if not 0.0 <= axis_floor < float(R):
             raise ValueError(f"axis_floor must lie in [0, R), got {axis_floor!r}")
-        #: rings are kept at r >= axis_floor [m] (module docstring, "Axis"; 0: at r >= 0)
-        self.axis_floor = float(axis_floor)
         self.M = np.broadcast_to(np.asarray(M, float), (n,)).copy()
         self.vol = np.broadcast_to(np.asarray(vol, float), (n,)).copy()
         self.params = pa = params
@@ -784,6 +782,9 @@ class AxisymmetricFluid:
         self.fluid = self.kind == FLUID
         self._fidx = np.flatnonzero(self.fluid)
         self.planar = bool(planar)
+        #: rings are kept at r >= axis_floor [m] (module docstring, "Axis"; 0: at r >= 0,
+        #: always in the planar mode, whose x = 0 is a symmetry plane)
+        self.axis_floor = 0.0 if self.planar else float(axis_floor)
         self.wall_z = None if wall_z is None else float(wall_z)
         self.z0, self.Lz = (0.0, 0.0) if periodic_z is None else map(float, periodic_z)
         if self.Lz and not self.R < 0.5 * self.Lz:
@@ -1260,8 +1261,7 @@ class AxisymmetricFluid:
         """Reflect the fluid at the axis and the wall plane, wrap periodic z, and hold it
         out of particle walls with normals (:mod:`sphfem.fluid.no_penetration`)."""
         _reflect_axis(self._fidx, self.x, self.v, self.wall_z is not None,
-                      0.0 if self.wall_z is None else self.wall_z,
-                      0.0 if self.planar else self.axis_floor)
+                      0.0 if self.wall_z is None else self.wall_z, self.axis_floor)
         if self.Lz:
             self.x[:, 1] = self.z0 + np.mod(self.x[:, 1] - self.z0, self.Lz)
         if self.no_penetration is not None:
