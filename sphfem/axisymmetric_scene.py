@@ -301,6 +301,15 @@ class AxisymmetricFluidModule(PhysicsModule):
         f = np.float64
         return {"v": (f, 2), "p": (f, 1), "f_fluid": (f, 2)}
 
+    @staticmethod
+    def _wall_top(x, kind, A):
+        """The z of the walls' top face (the top row plus half its spacing; None without
+        walls): the symmetry plane of ``csf_meridian = "stress"``."""
+        wl = kind == WALL
+        if not wl.any():
+            return None
+        return float(x[wl, 1].max() + 0.5 * np.sqrt(np.median(A[wl])))
+
     def init(self, ctx) -> None:
         from sphfem.fluid.axisymmetric import AxisymmetricFluid
 
@@ -324,7 +333,7 @@ class AxisymmetricFluidModule(PhysicsModule):
             wall_friction=self.scene.fluid.wall_friction,
             film_tension=self.scene.fluid.film_tension,
             axis_floor=self.AXIS_FLOOR_DX * float(dxf[0]),
-            **self._options())
+            stress_plane=self._wall_top(x, kind, A), **self._options())
         self.nrm = nrm
         wl = np.flatnonzero(kind == WALL)
         self._walls = wl

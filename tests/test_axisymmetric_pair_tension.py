@@ -75,7 +75,7 @@ def test_curvature_constant_scales_with_sigma_and_support():
 
 def test_meridian_option_is_checked():
     with pytest.raises(ValueError, match="meridian"):
-        AxisymmetricCSF(0.072, meridian="stress")
+        AxisymmetricCSF(0.072, meridian="bogus")
     with pytest.raises(ValueError, match="film model"):
         AxisymmetricCSF(0.072, meridian="pair", film=True)
 

@@ -58,6 +58,23 @@ def test_plug_constant_is_the_solver_wall_term():
     assert S == pytest.approx(1.682, abs=1e-3)
 
 
+def test_free_slip_wall_keeps_the_plug():
+    """``wall_friction = "none"``: a plug sliding along the wall keeps its momentum to
+    round-off (no viscous or artificial term on wall pairs), while the no-slip term slows it."""
+    dx, mu = 1e-6, 1e-3
+    x, v, kind, nrm, Lz = channel(dx=dx)
+    fl = kind == FLUID
+    lost = {}
+    for friction in ("none", "viscous"):
+        s = solver(x, v, kind, nrm, Lz, dx, mu, friction)
+        s.evaluate()
+        for _ in range(20):
+            s.step(s.stable_dt())
+        lost[friction] = 1.0 - s.v[fl, 1].mean() / U
+    assert abs(lost["none"]) < 1e-12
+    assert lost["viscous"] > 1e-3
+
+
 def test_layer_equation_exact_solutions():
     """Eq. (2) for constant a: a = 0 gives delta^2 = pi nu t (Stokes' first problem) and
     a > 0 relaxes to pi nu / (2 a); both to round-off from the exact step; a row entering

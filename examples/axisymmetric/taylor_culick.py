@@ -51,73 +51,103 @@ import numpy as np
 def retraction(rows: int, meridian: str = "pair", h: float = 8e-6, length: float = 40.0,
                t_end: float = 20.0, sigma: float = 0.072, rho0: float = 1000.0,
                mu: float = 1e-3, c0_factor: float = 10.0, film: bool = False,
-               shifting: float = 5.0 / 3.0, surface_lambda: float = 0.75):
+               shifting: float = 5.0 / 3.0, surface_lambda: float = 0.75,
+               wall: bool = False, drift: str = "kept"):
     """Run the free film (module docstring) to ``t_end`` h / V_TC; returns (times in
     h / V_TC, retracted length in h, speed / V_TC over the second half, the solver,
     the film's x momentum / (2 sigma t) at each time).  ``film``: the thin-film line
     tension (``[fluid] film_tension``); ``shifting``, ``surface_lambda``: the shifting's
-    A and ``[fluid] shifting_surface_lambda``.  The retracted length is that of the
-    film's body: its end is the 99th percentile of x (a ring of spray does not count)."""
+    A and ``[fluid] shifting_surface_lambda``, ``drift`` its ``shifting_drift``.  The
+    retracted length is that of the film's body: its end is the 99th percentile of x (a
+    ring of spray does not count).  ``wall``: the film lies on three free-slip wall rows
+    (module docstring, "On a wall"); speed and momentum are then over sqrt(sigma / (rho h))
+    and sigma t, and a sixth array is returned: the rim's lift, the height [h] of the
+    lowest fluid row within 2 h of the film's end above the first row's.
+    """
     from sphfem.fluid.axisymmetric import AxisymmetricFluid
     from sphfem.fluid.wcsph import FluidParams
-    from sphfem.particles import FLUID
+    from sphfem.particles import FLUID, WALL
 
     dx = h / rows
-    V = math.sqrt(2.0 * sigma / (rho0 * h))
+    line = sigma if wall else 2.0 * sigma  # the end's line force (90 degrees on the wall)
+    V = math.sqrt(line / (rho0 * h))
     L = length * h
     nx = int(round(L / dx))
-    z0 = 20 * dx
-    x = np.array([((i + 0.5) * dx, z0 + (j + 0.5) * dx) for i in range(nx)
-                  for j in range(rows)])
+    z0 = 0.0 if wall else 20 * dx
+    x = [((i + 0.5) * dx, z0 + (j + 0.5) * dx) for i in range(nx) for j in range(rows)]
+    nf = len(x)
+    if wall:  # three rows, reaching a support beyond the film's end
+        x += [((i + 0.5) * dx, -(j + 0.5) * dx) for i in range(nx + 4) for j in range(3)]
+    x = np.array(x)
     n = len(x)
+    kind = np.full(n, FLUID, np.int8)
+    kind[nf:] = WALL
     pa = FluidParams(rho0=rho0, c0=c0_factor * V, mu=mu, delta=0.1, alpha=0.02,
                      gravity=(0.0, 0.0))
-    f = AxisymmetricFluid(x, np.zeros((n, 2)), np.full(n, rho0), np.full(n, FLUID, np.int8),
-                          rho0 * dx * dx, dx * dx, 3.0 * dx, pa, planar=True,
-                          surface_tension=sigma, wall_tension=False,
-                          free_surface_no_tension=meridian != "pair", fragment_hoop=False,
+    f = AxisymmetricFluid(x, np.zeros((n, 2)), np.full(n, rho0), kind,
+                          np.where(kind == FLUID, rho0 * dx * dx, 0.0), dx * dx, 3.0 * dx, pa,
+                          planar=True, surface_tension=sigma, wall_tension=False,
+                          free_surface_no_tension=meridian == "csf", fragment_hoop=False,
                           csf_curvature_smoothing=2.0, shifting=shifting,
                           csf_meridian=meridian, film_tension=film,
-                          shift_surface_lambda=surface_lambda)
+                          shift_surface_lambda=surface_lambda, shift_drift=drift,
+                          wall_friction="none" if wall else "sph",
+                          stress_plane=0.0 if wall else None)
     tc = h / V
     rec = []
 
     def record(s):
-        # the retraction is the only x momentum source: P(t) = -2 sigma t exactly for a
+        # the retraction is the only x momentum source: P(t) = -line t exactly for a
         # force of the right size, whatever the rim's shape
+        xf = s.x[s.fluid]
         P = float(np.dot(s.M[s.fluid], s.v[s.fluid, 0]))
-        rec.append((s.t / tc, (L - np.percentile(s.x[s.fluid, 0], 99.0)) / h,
-                    -P / (2.0 * sigma * s.t) if s.t > 0 else np.nan))
+        end = np.percentile(xf[:, 0], 99.0)
+        rim = xf[:, 0] > end - 2.0 * h
+        rec.append((s.t / tc, (L - end) / h, -P / (line * s.t) if s.t > 0 else np.nan,
+                    (xf[rim, 1].min() - 0.5 * dx) / h))
 
     f.run(t_end * tc, callback=record, every=tc)
     a = np.array(rec)
     late = a[:, 0] >= 0.5 * a[-1, 0]
-    return a[:, 0], a[:, 1], float(np.polyfit(a[late, 0], a[late, 1], 1)[0]), f, a[:, 2]
+    out = (a[:, 0], a[:, 1], float(np.polyfit(a[late, 0], a[late, 1], 1)[0]), f, a[:, 2])
+    return out + (a[:, 3],) if wall else out
 
 
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("--rows", type=int, nargs="+", default=[4, 8])
     ap.add_argument("--meridian", nargs="+", default=["csf", "pair"],
-                    choices=("csf", "pair"))
+                    choices=("csf", "pair", "stress"))
     ap.add_argument("--film", action="store_true", help="[fluid] film_tension = true")
     ap.add_argument("--shifting", type=float, default=5.0 / 3.0, help="shifting's A")
     ap.add_argument("--surface-lambda", type=float, default=0.75,
                     help="[fluid] shifting_surface_lambda")
     ap.add_argument("--length", type=float, default=40.0, help="film length [h]")
     ap.add_argument("--t-end", type=float, default=20.0, help="end time [h / V_TC]")
+    ap.add_argument("--wall", action="store_true",
+                    help="the film on a free-slip wall (dewetting at 90 degrees)")
+    ap.add_argument("--drift", default="kept", choices=("kept", "removed"),
+                    help="[fluid] shifting_drift")
+    ap.add_argument("--mu", type=float, default=1e-3, help="viscosity [Pa s]")
+    ap.add_argument("--c0", type=float, default=10.0,
+                    help="speed of sound over the retraction speed (it must exceed the "
+                         "capillary wave speed sqrt(2 pi sigma / (rho R / 2)))")
     a = ap.parse_args(argv)
-    print("rows  meridian  speed / V_TC   retracted (h) at 1/4, 1/2, 3/4, 1 of t_end   "
-          "momentum / (2 sigma t) min-max")
+    unit, force = ("sqrt(sigma/(rho h))", "sigma t") if a.wall else ("V_TC", "2 sigma t")
+    print(f"rows  meridian  speed / {unit}   retracted (h) at 1/4, 1/2, 3/4, 1 of t_end   "
+          f"momentum / ({force}) min-max" + ("   rim lift (h) max" if a.wall else ""))
     for k in a.rows:
         for m in a.meridian:
-            t, d, s, _, mom = retraction(k, m, length=a.length, t_end=a.t_end, film=a.film,
-                                         shifting=a.shifting,
-                                         surface_lambda=a.surface_lambda)
+            r = retraction(k, m, length=a.length, t_end=a.t_end, film=a.film,
+                           shifting=a.shifting, surface_lambda=a.surface_lambda,
+                           wall=a.wall, drift=a.drift, mu=a.mu,
+                           c0_factor=a.c0)
+            t, d, s, _, mom = r[:5]
             at = [d[np.argmin(abs(t - q * a.t_end))] for q in (0.25, 0.5, 0.75, 1.0)]
             late = mom[t >= 2.0]
             print(f"{k:4d}  {m:8s}  {s:12.3f}   " + " / ".join(f"{v:.2f}" for v in at)
-                  + f"   {late.min():.2f}-{late.max():.2f}")
+                  + f"   {late.min():.2f}-{late.max():.2f}"
+                  + (f"   {r[5].max():.2f}" if a.wall else ""), flush=True)
 
 
 if __name__ == "__main__":

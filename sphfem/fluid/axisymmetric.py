@@ -705,7 +705,9 @@ class AxisymmetricFluid:
     ``wall_friction``: "sph" (the no-slip viscous term and the artificial viscosity on wall
     pairs), "viscous" (the no-slip viscous term alone) or "layer" (the viscous term times the
     unresolved-layer factor of :mod:`sphfem.fluid.wall_layer`, no artificial viscosity on
-    wall pairs; needs ``wall_normals``).
+    wall pairs; needs ``wall_normals``) or "none" (free slip: neither term on wall pairs; the
+    walls push only through the pressure, e.g. for the dewetting check of
+    ``examples/axisymmetric/taylor_culick.py --wall``).
 
     ``planar=True``: plain 2D SPH in the (x, y) = (r, z) plane with a symmetry plane at
     x = 0 (the same mirrors), ``M`` then the planar masses [kg/m]: no hoop terms, A = M / rho
@@ -721,7 +723,9 @@ class AxisymmetricFluid:
     as the pair force of :mod:`sphfem.fluid.axisymmetric_pair_tension` (the hoop part stays
     the CSF's); with it ``free_surface_no_tension`` holds only the rings next to the axis,
     where the CSF's meridian part acts (the pair force's tension lives in the surface
-    rings' pressure).
+    rings' pressure); or "stress": the whole surface force as the divergence of a surface
+    stress (:mod:`sphfem.fluid.axisymmetric_surface_stress`), with the wall plane z =
+    ``stress_plane`` as its 90-degree symmetry plane (None: no wall).
 
     ``axis_alpha``: the artificial viscosity's alpha of the rings within one support of the
     axis (smoothstep back to the scene's alpha at two supports; pairs take the mean of
@@ -751,7 +755,7 @@ class AxisymmetricFluid:
                  csf_axis_curvature: bool = False, csf_curvature_smoothing: float = 1.0,
                  axis_alpha: float = 0.0, csf_meridian: str = "csf",
                  shift_surface_lambda: float = 0.75, shift_drift: str = "kept",
-                 axis_floor: float = 0.0):
+                 axis_floor: float = 0.0, stress_plane: float | None = None):
         self.x = np.array(x, dtype=np.float64)
         n = self.n = self.x.shape[0]
         self.v = np.array(v, dtype=np.float64).reshape(n, 2)
@@ -846,16 +850,19 @@ class AxisymmetricFluid:
                                     curvature_smoothing=csf_curvature_smoothing,
                                     meridian=csf_meridian, rho0=pa.rho0)
                     if surface_tension > 0.0 else None)
+        if self.csf is not None:
+            self.csf.plane = None if stress_plane is None else float(stress_plane)
         self.wall_normals = None if wall_normals is None else np.asarray(
             wall_normals, float).reshape(n, 2)
-        if wall_friction not in ("sph", "viscous", "layer"):
-            raise ValueError(f"wall_friction must be 'sph', 'viscous' or 'layer', got "
+        if wall_friction not in ("sph", "viscous", "layer", "none"):
+            raise ValueError(f"wall_friction must be 'sph', 'viscous', 'layer' or 'none', got "
                              f"{wall_friction!r}")
-        #: "sph", "viscous" or "layer" (class docstring)
+        #: "sph", "viscous", "layer" or "none" (class docstring)
         self.wall_friction = wall_friction
         wl = self.kind == WALL
-        #: per-row factor of the wall pairs' viscous term (sphfem.fluid.wall_layer, eq. 3)
-        self.fw = np.ones(n)
+        #: per-row factor of the wall pairs' viscous term (sphfem.fluid.wall_layer, eq. 3;
+        #: 0 for a free-slip wall)
+        self.fw = np.full(n, 0.0 if wall_friction == "none" else 1.0)
         #: weight of the contact line per row: the layer's friction factor is lifted there
         #: (sphfem.fluid.wall_layer, "Contact line")
         self.contact_line = np.zeros(n)
@@ -1189,6 +1196,8 @@ class AxisymmetricFluid:
         support drifts below rho0 and its tension pulls its neighbours out of the surface."""
         if self.free_surface_no_tension:
             s = self.fluid & (self.lam < 0.75) & (self.rho < self.params.rho0)
+            if self.csf is not None and self.csf.meridian == "stress":
+                return  # the surface stress carries the surface's tension (its module)
             if self.csf is not None and self.csf.meridian == "pair":
                 # the pair force's tension lives in the surface rings' pressure: held only
                 # where the CSF's meridian part acts, next to the axis

@@ -479,12 +479,14 @@ def mirror_tensor(n, src, mtype, S):
 
 @njit(cache=True)
 def mirror_flags(n, src, mtype, fl, wl):
-    """Fluid-like (``fl``) and wall-like (``wl``) mirrors, in order: an axis image keeps
-    its source's, a wall-plane image of the fluid stands for the wall."""
+    """Fluid-like (``fl``) and wall-like (``wl``) mirrors, in order: an axis image (type 0)
+    and an image across the surface stress' plane (type 2, :mod:`sphfem.fluid.
+    axisymmetric_surface_stress`) keep their source's, a wall-plane image of the fluid
+    (type 1) stands for the wall."""
     for q in range(src.shape[0]):
         s = src[q]
         k = n + q
-        if mtype[q] == 0:
+        if mtype[q] != 1:
             fl[k] = fl[s]
             wl[k] = wl[s]
         else:
@@ -535,6 +537,16 @@ def row_moment(s, R, kernel_code) -> np.ndarray:
     _row_moment(s, float(R), kernels.kernel_sigma(kernel_code, 2, R) / (R * R),
                 int(kernel_code), out)
     return out
+
+
+def film_hoop(x, rho, tau, tang, M) -> np.ndarray:
+    """(tau M_tt / (r rho)) (t_r t - e_r): the acceleration of the in-plane hoop stress of a
+    tension tau t t (eq. F3; rows of real fluid, r = |x_r| > 0)."""
+    r = np.maximum(np.abs(x[:, 0]), 1e-300)
+    t0, t1 = tang[:, 0], tang[:, 1]
+    mtt = t0 * t0 * M[:, 0] + 2.0 * t0 * t1 * M[:, 1] + t1 * t1 * M[:, 2]
+    k = tau * mtt / (r * rho)
+    return np.column_stack([k * (t0 * t0 - 1.0), k * t0 * t1])
 
 
 def colour_kinds(kind) -> np.ndarray:
@@ -665,8 +677,8 @@ class AxisymmetricCSF:
                  axis_curvature: bool = False, curvature_smoothing: float = 1.0,
                  meridian: str = "csf", wall_colour: float | None = None,
                  rho0: float | None = None):
-        if meridian not in ("csf", "pair"):
-            raise ValueError(f'meridian must be "csf" or "pair", got {meridian!r}')
+        if meridian not in ("csf", "pair", "stress"):
+            raise ValueError(f'meridian must be "csf", "pair" or "stress", got {meridian!r}')
         if meridian == "pair" and film:
             raise ValueError('the film model replaces the CSF on thin films; it does not go '
                              'with meridian = "pair"')
@@ -703,6 +715,8 @@ class AxisymmetricCSF:
         #: the rest density of the pair force's K_ij (None: the fluid's median density at
         #: the first evaluation)
         self.rho0 = None if rho0 is None else float(rho0)
+        #: the wall plane z of the surface stress' images (meridian "stress"; None: none)
+        self.plane = None
         self.state = None
         self.kappa_m = self.kappa_h = np.zeros(0)
         #: film model, real rows of the last evaluation: weight phi, wall contact, the
@@ -731,6 +745,12 @@ class AxisymmetricCSF:
                 np.asarray(lam, float)[:n] >= self.axis_lambda_gate)
             st.omega[:n][bulk] = 0.0
         mirror_normals(n, src, mtype, st.g, st.omega)
+        if self.meridian == "stress":  # the surface stress (its module) in place of the CSF
+            from sphfem.fluid.axisymmetric_surface_stress import surface_stress_forces
+
+            acc[:n] += surface_stress_forces(self, x, A, rho, kind, n, src, mtype, R,
+                                             float(Lz), self.plane)
+            return st
         csf_curvature(x, A, kc, offsets, indices, R, ks, kcode, period, TANGENT_MIN, st.g,
                       st.omega, st.kappa)
         self.kappa_m = st.kappa.copy()
@@ -817,6 +837,31 @@ class AxisymmetricCSF:
     def film_forces(self, x, A, rho, kind, offsets, indices, n, src, mtype, R, period):
         """The film model's weight phi and acceleration of the real rows (module docstring,
         "Thin films")."""
+        f = self.film_fields(x, A, rho, kind, offsets, indices, n, src, mtype, R, period)
+        phi, S, tang, M, tau = f["phi"], f["S"], f["tang"], f["M"], f["tau"]
+        m = x.shape[0]
+        kcode = self.kernel_code
+        fac2 = kernels.kernel_sigma(kcode, 2, R) / (R * R)
+        fa = np.zeros((m, 2))
+        film_force(x, A, rho, f["fl"], n, offsets, indices, R, fac2, kcode, period, S, phi, fa)
+        fa = fa[:n]
+        if self.hoop:  # (tau / r)(t_r t - e_r) of the film's in-plane hoop stress, eq. (F3)
+            fa += (phi[:n] * self.axis_fade(x[:n, 0], R))[:, None] * film_hoop(
+                x[:n], rho[:n], tau[:n], tang[:n], M[:n])
+        self.film_acc = fa.copy()
+        return phi[:n], fa
+
+    def axis_fade(self, r, R) -> np.ndarray:
+        """smoothstep of |r| from axis_band[0] R to axis_band[1] R (0 at the axis)."""
+        lo, hi = self.axis_band[0] * R, self.axis_band[1] * R
+        u = np.clip((np.abs(r) - lo) / (hi - lo), 0.0, 1.0)
+        return u * u * (3.0 - 2.0 * u)
+
+    def film_fields(self, x, A, rho, kind, offsets, indices, n, src, mtype, R, period) -> dict:
+        """The film model's fields over the augmented rows (module docstring, "Thin films"):
+        fluid-like and wall-like flags ``fl``, ``wl``, fluid-only moment matrices ``M``,
+        film tangent ``tang``, weight ``phi``, tension ``tau`` and stress ``S`` = tau t t
+        (mirrors filled)."""
         m = x.shape[0]
         kcode = self.kernel_code
         fac2 = kernels.kernel_sigma(kcode, 2, R) / (R * R)
@@ -866,21 +911,8 @@ class AxisymmetricCSF:
         S = tau[:, None] * np.column_stack([tang[:, 0] ** 2, tang[:, 0] * tang[:, 1],
                                              tang[:, 1] ** 2])
         mirror_tensor(n, src, mtype, S)
-        fa = np.zeros((m, 2))
-        film_force(x, A, rho, fl, n, offsets, indices, R, fac2, kcode, period, S, phi, fa)
-        fa = fa[:n]
-        if self.hoop:  # (tau / r)(t_r t - e_r) of the film's in-plane hoop stress, eq. (F3)
-            r = np.abs(x[:n, 0])
-            lo, hi = self.axis_band[0] * R, self.axis_band[1] * R
-            u = np.clip((r - lo) / (hi - lo), 0.0, 1.0)
-            w = np.where(phi[:n] > 0.0, phi[:n] * u * u * (3.0 - 2.0 * u), 0.0)
-            t0, t1 = tang[:n, 0], tang[:n, 1]
-            mtt = t0 * t0 * M[:n, 0] + 2.0 * t0 * t1 * M[:n, 1] + t1 * t1 * M[:n, 2]
-            k = w * tau[:n] * mtt / (np.maximum(r, 1e-300) * rho[:n])
-            fa[:, 0] += k * (tang[:n, 0] ** 2 - 1.0)
-            fa[:, 1] += k * tang[:n, 0] * tang[:n, 1]
+        mirror_scalar(n, src, phi)
         self.film_phi = phi[:n].copy()
         self.film_touch = touch[:n].copy()
         self.film_stress = S[:n].copy()
-        self.film_acc = fa.copy()
-        return phi[:n], fa
+        return dict(fl=fl, wl=wl, M=M, tang=tang, phi=phi, tau=tau, S=S)

@@ -56,9 +56,9 @@ def _check(rec, ctx, path):
     if rec.shifting_speed == "strain" and getattr(meta, "geometry", None) != "axisymmetric":
         ctx.error(f"{path}.shifting_speed", "shifting_speed = \"strain\" is implemented for "
                   "geometry = \"axisymmetric\" only (use \"local\" or \"max\")")
-    if rec.csf_meridian == "pair" and rec.film_tension:
-        ctx.error(f"{path}.csf_meridian", "csf_meridian = \"pair\" and film_tension = "
-                  "true both replace the CSF's pull on films: choose one")
+    if rec.csf_meridian != "csf" and rec.film_tension:
+        ctx.error(f"{path}.csf_meridian", f"csf_meridian = \"{rec.csf_meridian}\" and "
+                  "film_tension = true both replace the CSF's pull on films: choose one")
     names, mats = _fluid_materials(ctx)
     if not names:
         ctx.error("physics.modules", "the fluid module needs at least one block of kind "
@@ -104,25 +104,30 @@ FLUID = Section("fluid", (
           doc="artificial viscosity coefficient (Monaghan 1992 in the always-on form of "
               "Marrone et al. 2011, pair coefficient alpha h c0, h = R/2; 0 = off, "
               "0.01-0.05 for violent free-surface flows)"),
-    Param("wall_friction", str, "sph", choices=("sph", "viscous", "layer"),
+    Param("wall_friction", str, "sph", choices=("sph", "viscous", "layer", "none"),
           doc="friction of the no-slip walls (axisymmetric fluid): sph = the viscous term "
               "and the artificial viscosity on wall pairs; viscous = the viscous term alone; "
               "layer = the viscous term scaled to the traction mu U / delta of a wall layer "
               "thinner than the spacing, d(delta^2)/dt = pi nu - 2 a delta^2 "
-              "(sphfem.fluid.wall_layer), no artificial viscosity on wall pairs"),
+              "(sphfem.fluid.wall_layer), no artificial viscosity on wall pairs; none = free "
+              "slip (neither term on wall pairs)"),
     Param("film_tension", bool, False,
           doc="axisymmetric CSF: films thinner than about the kernel support carry the "
               "line tension of their faces as a membrane stress (2 sigma free, sigma on a "
               "wall) instead of the CSF, whose truncated colour field gives their ends "
               "0-76 % of it (sphfem.fluid.axisymmetric_surface_tension, \"Thin films\")"),
-    Param("csf_meridian", str, "csf", choices=("csf", "pair"),
+    Param("csf_meridian", str, "csf", choices=("csf", "pair", "stress"),
           doc="axisymmetric CSF: the force of the meridian curvature as the CSF's sigma "
               "kappa_m grad C (csf) or as the pair force of Akinci et al. (2013) in the "
               "(r, z) plane (pair: equal and opposite pair terms, so a film's end is pulled "
               "by the line force whatever its shape, and a retracting rim stays compact; "
               "the surface rings are then held at rho >= rho0 only next to the axis, where "
               "the CSF's meridian part acts, elsewhere the tension lives in their pressure; "
-              "sphfem.fluid.axisymmetric_pair_tension); the hoop part stays the CSF's"),
+              "sphfem.fluid.axisymmetric_pair_tension); the hoop part stays the CSF's; "
+              "stress (experimental): the whole surface force as the divergence of a "
+              "surface stress normalised to sigma per face, with the wall top as its "
+              "90-degree symmetry plane and no free-surface density hold "
+              "(sphfem.fluid.axisymmetric_surface_stress)"),
     Param("gravity", VECTOR, lambda dim: (0.0,) * dim, unit="m/s^2", default_doc="zeros",
           quantity="acceleration", doc="body force per unit mass"),
     Param("gravity_ramp", float, 0.0, unit="s", ge=0.0, quantity="time",

@@ -1,0 +1,229 @@
+"""Surface tension as the divergence of a surface stress (``[fluid] csf_meridian = "stress"``).
+
+The CSF of :mod:`sphfem.fluid.axisymmetric_surface_tension` is a field force sigma kappa
+grad C: its integral over a group of rings is not the flux of anything through the group's
+edge, so the pull on the end of a film or a rim is whatever the end's few rings' curvature
+makes it.  Measured on a film dewetting a free-slip wall at 90 degrees
+(``examples/axisymmetric/taylor_culick.py --wall``, momentum over the exact sigma t): 0.53-0.77
+at 8 rows, 0.42-0.89 at 4, spray at 16; the Akinci pair force 1.03-1.18 / 1.12-1.22 /
+3.4-5.0; so the rim that stops a spreading lamella is pulled by neither.
+
+This model writes the surface tension as what it is in the continuum, a stress confined to
+the interface (Lafaurie et al. 1994, J. Comput. Phys. 113: 134; the CSS),
+
+    T = sigma delta_s (I - n n),      f = div T,                                       (S1)
+
+in the meridian half-plane with the symmetric SPH divergence
+
+    a_i = 1 / rho_i sum_j A_j (S_i + S_j) . grad_i W_ij,                                (S2)
+
+S the planar part tau t t of T (t the interface tangent).  (S2) is antisymmetric in i and j,
+so the force on any group of rows is the flux of S through its edge: a film's end is pulled
+by the tension its cross-section carries, whatever the end's shape, and a thick body's face
+by sigma per face.  The tension per row is set so that the flux is exact on a lattice:
+
+- on the face of thick fluid, tau_i = sigma psi_i / Q_i with psi = omega |g| (the CSF's
+  colour gradient g with walls as liquid, i.e. a 90 degree wall, and its normal weight
+  omega) and Q_i = sum_j A_j w1(t_i . r_ij) psi_j t_i . M_j . t_i over the rows of the same
+  face (g_i . g_j > 0; w1 the kernel normalised in 1D, M_j the fluid moment matrix): the
+  integral of psi M_tt across the face, whose flux sum_rows s tau M_tt is then sigma;
+- in films thinner than about the support (weight phi of the film model), the film model's
+  S = tau t t with tau = gamma / Q, gamma = 2 sigma free and sigma on a wall
+  (:mod:`sphfem.fluid.axisymmetric_surface_tension`, "Thin films");
+- S_i = phi_i S_film,i + (1 - phi_i) S_face,i: the stresses are blended, not the forces, so
+  the junction of a film with thick fluid keeps (S2)'s balance.
+
+Walls: a wall at 90 degrees is a symmetry plane of the surface stress (the liquid and its
+mirror image are a free body, whose surface stress is that of the free surface; sigma_sl =
+sigma_sv gives the wall no tangential pull, and the foot of a face meeting the wall is held
+by its image as by the solid).  So the model runs on its own set: the fluid rows, their axis
+mirrors, and the images of both across the wall plane z = ``plane`` (``[fluid]``: the top of
+the wall blocks; None: no wall), with no wall rows at all; a film on the wall is the half
+of a free film twice as thick (gamma = 2 sigma on the doubled film, whose real half then
+carries sigma).  Walls that are not that plane are not seen by the stress.
+
+Axisymmetric: the
+interface stress is isotropic in its plane, so T also has tau e_theta e_theta, whose
+divergence adds (tau M_tt / r)(t_r t - e_r) (eq. F3 of the film model); within
+``axis_band`` of the axis that ratio is blended (smoothstep) into the planar force's normal
+part (the two principal curvatures are equal at the pole).
+
+Not modelled: contact angles other than 90 degrees.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit, prange
+
+from sphfem import kernels
+from sphfem.fluid.passes import grad_factor
+from sphfem.kernels import kernel_f
+from sphfem.smallmat import pair_sep
+
+#: floor of Q as a fraction of psi_i times a one-row film's Q (an isolated ring with a
+#: colour gradient would otherwise get tau ~ 1 / Q unbounded)
+FACE_Q_MIN = 0.5
+PSI_GRAD = False
+Q_SPREAD = True
+
+
+@njit(cache=True, parallel=True)
+def face_moment(x, A, fl, n, offsets, indices, R, sigma1, kernel_code, period, tang, g, psi,
+                M, Q):
+    """Q_i = sum_j A_j w1(t_i . r_ij) psi_j t_i . M_j . t_i over the row itself and its
+    fluid-like neighbours j of the same face (g_i . g_j > 0), real fluid rows i < n with
+    psi_i > 0 (0 elsewhere); w1 the kernel's shape normalised in 1D by ``sigma1``."""
+    R2 = R * R
+    periodic = period[0] > 0.0 or period[1] > 0.0
+    for i in prange(n):
+        Q[i] = 0.0
+        if not fl[i] or psi[i] == 0.0:
+            continue
+        t0 = tang[i, 0]
+        t1 = tang[i, 1]
+        q = A[i] * sigma1 * kernel_f(0.0, kernel_code) * psi[i] * (
+            t0 * t0 * M[i, 0] + 2.0 * t0 * t1 * M[i, 1] + t1 * t1 * M[i, 2])
+        for jj in range(offsets[i], offsets[i + 1]):
+            j = indices[jj]
+            if not fl[j] or psi[j] == 0.0:
+                continue
+            if g[i, 0] * g[j, 0] + g[i, 1] * g[j, 1] <= 0.0:
+                continue
+            r0, r1, r2 = pair_sep(x, i, j, 2, period, periodic)
+            d2 = r0 * r0 + r1 * r1
+            if d2 >= R2 or d2 == 0.0:
+                continue
+            mtt = t0 * t0 * M[j, 0] + 2.0 * t0 * t1 * M[j, 1] + t1 * t1 * M[j, 2]
+            q += A[j] * sigma1 * kernel_f(abs(t0 * r0 + t1 * r1) / R, kernel_code) * psi[j] \
+                * mtt
+        Q[i] = q
+
+
+@njit(cache=True, parallel=True)
+def stress_force(x, A, rho, n, offsets, indices, R, fac2, kernel_code, period, S, acc):
+    """acc[i] = 1 / rho_i sum_j A_j (S_i + S_j) . grad_i W_ij (eq. S2) of the rows i < n over
+    their listed neighbours; S = (S_rr, S_rz, S_zz)."""
+    R2 = R * R
+    periodic = period[0] > 0.0 or period[1] > 0.0
+    for i in prange(n):
+        f0 = 0.0
+        f1 = 0.0
+        for jj in range(offsets[i], offsets[i + 1]):
+            j = indices[jj]
+            r0, r1, r2 = pair_sep(x, i, j, 2, period, periodic)
+            d2 = r0 * r0 + r1 * r1
+            if d2 >= R2 or d2 == 0.0:
+                continue
+            t = A[j] * grad_factor(math.sqrt(d2), R, fac2, kernel_code)
+            srr = S[i, 0] + S[j, 0]
+            srz = S[i, 1] + S[j, 1]
+            szz = S[i, 2] + S[j, 2]
+            f0 += t * (srr * r0 + srz * r1)
+            f1 += t * (srz * r0 + szz * r1)
+        acc[i, 0] = f0 / rho[i]
+        acc[i, 1] = f1 / rho[i]
+
+
+def face_tension(csf, x, A, fl, n, offsets, indices, R, period, g, omega, M, src, mtype):
+    """The face tension tau (augmented rows, 0 off the faces) and the face tangent (module
+    docstring): tau_i = sigma psi_i / Q_i, psi = omega |g|."""
+    from sphfem.fluid.axisymmetric_surface_tension import row_moment
+
+    kcode = csf.kernel_code
+    gn = np.sqrt(g[:, 0] ** 2 + g[:, 1] ** 2)
+    psi = np.where(fl & (gn > 0.0), omega * (gn if PSI_GRAD else 1.0), 0.0)
+    nz = np.where(gn > 0.0, gn, 1.0)
+    tang = np.column_stack([-g[:, 1] / nz, g[:, 0] / nz])
+    Q = np.zeros(x.shape[0])
+    face_moment(x, A, fl, n, offsets, indices, R, kernels.kernel_sigma(kcode, 1, R), kcode,
+                period, tang, g, psi, M, Q)
+    if Q_SPREAD:
+        from sphfem.fluid.axisymmetric_surface_tension import film_max, mirror_scalar
+
+        mirror_scalar(n, src, Q)
+        Qm = np.zeros_like(Q)
+        film_max(x, fl, n, offsets, indices, R, period, Q, Qm)
+        Q = Qm
+    sp = np.sqrt(np.maximum(A, 1e-300))
+    Qf = np.maximum(Q, FACE_Q_MIN * psi * row_moment(sp, R, kcode))
+    tau = np.where(Qf > 0.0, csf.sigma * psi / np.where(Qf > 0.0, Qf, 1.0), 0.0)
+    return tau, tang
+
+
+def surface_stress_forces(csf, x, A, rho, kind, n, src, mtype, R, Lz, plane) -> np.ndarray:
+    """The acceleration of the real fluid rows i < n (module docstring) from the augmented
+    set of the fluid (``kind``: FLUID, WALL and their mirrors n + q of ``src[q]``, type
+    ``mtype[q]``), its z period ``Lz`` (0: open) and the wall plane z = ``plane`` (None)."""
+    from sphfem.axisymmetric import MIRROR_FLUID
+    from sphfem.fluid.axisymmetric_surface_tension import (
+        NORMAL_HI,
+        NORMAL_LO,
+        film_hoop,
+        mirror_normals,
+        mirror_scalar,
+    )
+    from sphfem.fluid.surface_tension_csf import csf_normals
+    from sphfem.neighbors import build_neighbor_list
+    from sphfem.particles import FLUID
+
+    kind = np.asarray(kind)
+    own = np.flatnonzero(kind[:n] == FLUID)
+    mir = np.flatnonzero(kind[n:] == MIRROR_FLUID)
+    idx = np.concatenate([own, n + mir])
+    pos = np.full(x.shape[0], -1, np.int64)
+    pos[idx] = np.arange(idx.size)
+    k = own.size
+    msrc = pos[np.asarray(src)[mir]]
+    mtyp = np.asarray(mtype, np.int8)[mir]
+    xs, As, rs = x[idx], A[idx], rho[idx]
+    if plane is not None:  # the images (type 2) across the wall plane, after the mirrors
+        near = np.flatnonzero(xs[:, 1] - plane < R)
+        im = xs[near].copy()
+        im[:, 1] = 2.0 * plane - im[:, 1]
+        xs = np.vstack([xs, im])
+        As = np.concatenate([As, As[near]])
+        rs = np.concatenate([rs, rs[near]])
+        msrc = np.concatenate([msrc, near])
+        mtyp = np.concatenate([mtyp, np.full(near.size, 2, np.int8)])
+    m = xs.shape[0]
+    period = np.array([0.0, float(Lz)])
+    lo = xs.min(axis=0) - R
+    hi = xs.max(axis=0) + R
+    nl = build_neighbor_list(xs, R, lo, hi, period)
+    off, ind = nl.offsets, nl.indices
+    ks = np.full(m, FLUID, np.int8)
+    kc = csf.kernel_code
+    g = np.zeros((m, 2))
+    omega = np.zeros(m)
+    csf_normals(xs, As, ks, off, ind, R, kernels.kernel_sigma(kc, 2, R), kc, period,
+                NORMAL_LO, NORMAL_HI, g, omega)
+    mirror_normals(k, msrc, mtyp, g, omega)
+    ks[k:] = MIRROR_FLUID
+    f = csf.film_fields(xs, As, rs, ks, off, ind, k, msrc, mtyp, R, period)
+    fl, M, phi = f["fl"], f["M"], f["phi"]
+    tau_f, tang_f = face_tension(csf, xs, As, fl, k, off, ind, R, period, g, omega, M,
+                                 msrc, mtyp)
+    mirror_scalar(k, msrc, tau_f)
+    tf = np.column_stack([tang_f[:, 0] ** 2, tang_f[:, 0] * tang_f[:, 1],
+                          tang_f[:, 1] ** 2])
+    S = phi[:, None] * f["S"] + (1.0 - phi)[:, None] * (tau_f[:, None] * tf)
+    fac2 = kernels.kernel_sigma(kc, 2, R) / (R * R)
+    acc = np.zeros((k, 2))
+    stress_force(xs, As, rs, k, off, ind, R, fac2, kc, period, S, acc)
+    csf.stress_planar = acc.copy()
+    csf.stress_phi = phi[:k].copy()
+    if csf.hoop:
+        s = csf.axis_fade(xs[:k, 0], R)[:, None]
+        p = phi[:k, None]
+        hoop = (p * film_hoop(xs[:k], rs[:k], f["tau"][:k], f["tang"][:k], M[:k])
+                + (1.0 - p) * film_hoop(xs[:k], rs[:k], tau_f[:k], tang_f[:k], M[:k]))
+        gn = np.sqrt(g[:k, 0] ** 2 + g[:k, 1] ** 2)
+        nrm = g[:k] / np.where(gn > 0.0, gn, 1.0)[:, None]
+        pole = np.sum(acc * nrm, axis=1)[:, None] * nrm  # the pole: hoop = meridian part
+        acc += s * hoop + (1.0 - s) * (1.0 - p) * pole
+    out = np.zeros((n, 2))
+    out[own] = acc
+    return out
