@@ -38,6 +38,19 @@ ring of a thin film, lambda < 0.75) cannot undo.  CSF at 4 rows: 1.01 V_TC but m
 momentum 1.01-1.10, compact filled rim; CSF at 8 rows with ``--shifting 5
 --surface-lambda 0.5``: 0.73 V_TC, 0.68-1.14, a compact disc
 (docs/validation/droplet_impact/README.md, "Session 19").
+
+On a wall (``--wall``, session 22): the film lies on three free-slip wall rows
+(``wall_friction = "none"``) and dewets at 90 degrees; the end's line force is then sigma
+(the top face's; sigma_sl = sigma_sv), the film's momentum sigma t exactly for a force of
+the right size, the speed of inertial dewetting sqrt(sigma / (rho h)) (Culick's balance
+with one free face).  Measured with ``--length 20 --t-end 8 --drift removed --mu 1e-3 --c0
+30`` (momentum / (sigma t) over t >= 2, speed over sqrt(sigma / (rho h))): CSF 0.42-0.89
+at 4 rows (mu 1e-4, c0 10), 0.53-0.77 / speed 0.58 at 8, 0.57-0.88 / 0.33 at 16; pair force
+1.03-1.18 / 0.96 at 4 (mu 1e-4), 1.12-1.22 / 0.94 at 8, 1.23-1.69 / 1.05 at 16; the surface
+stress (``--meridian stress``, sphfem.fluid.axisymmetric_surface_stress) 1.05-1.07 at 4
+rows, unstable at 8.  No model gets the rim's pull within 10 % at 4-16 rows.  c0 must
+exceed the capillary wave speed sqrt(2 pi sigma / (rho R / 2)) (24.6 m/s at 16 rows, h = 8
+um): ``--c0 10`` (30 m/s) is marginal there.
 """
 
 from __future__ import annotations

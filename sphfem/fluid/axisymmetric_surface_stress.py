@@ -48,7 +48,28 @@ divergence adds (tau M_tt / r)(t_r t - e_r) (eq. F3 of the film model); within
 ``axis_band`` of the axis that ratio is blended (smoothstep) into the planar force's normal
 part (the two principal curvatures are equal at the pole).
 
-Not modelled: contact angles other than 90 degrees.
+Measured (session 22, 2026-12-05; tests/test_axisymmetric_surface_stress.py,
+examples/axisymmetric/taylor_culick.py with ``--length 20 --t-end 8 --drift removed --mu
+1e-3 --c0 30``):
+
+- static pull on the outer half of a film 1-12 rows thick, square or rounded end: 0.994 of
+  the line force free and on the wall (the CSF: 0.12-1.35; the 1D quadrature of the kernel
+  at R = 3 dx gives 0.994), and -0.99 to -1.07 sigma normal to the wall for 3 rows and more
+  (exact: -sigma, the face's turn from horizontal to vertical);
+- a free film 4 rows thick retracting: momentum 0.994 x 2 sigma t at every frame, speed
+  0.77 V_TC (the pair force 0.84, the CSF 0.59); on the wall (4 rows) 1.05-1.07 sigma t,
+  speed 0.33;
+- 8 rows and more: NOT stable.  The rim's rows fan out into strings and surface rings are
+  flung out (with the free-surface density hold), or, without the hold (the default for
+  this model), a particle-scale wave runs from the rim into the film (pressure +-2e4 Pa
+  from ring to ring, the tensile instability of the face rows under tension along the
+  surface) and the momentum falls to 0.4-0.5 of 2 sigma t by 6-8 h / V_TC: the free film at
+  8 rows retracts at 0.72 V_TC, on the wall the rim does not form.  Neither stronger
+  shifting (A = 5, surface lambda 0.5) nor c0 = 60 V_TC changed that.
+- The 10 m/s impact (We 139, Re 3333) at D/dx 64 with the model, member 0: D_max/D 3.60 at
+  1.83 t_c, 4.2 % broken off, 164 s (the CSF's session-20 mean at 64: 4.03).  One run.
+
+Not modelled: contact angles other than 90 degrees.  Experimental: off by default.
 """
 
 from __future__ import annotations
