@@ -54,26 +54,37 @@ def end_pull(rows, wall, rounded):
 @pytest.mark.parametrize("wall", [False, True])
 @pytest.mark.parametrize("rounded", [False, True])
 def test_film_end_pull_is_the_line_force(rows, wall, rounded):
-    """0.994 of the line force (the 1D quadrature of the kernel at R = 3 dx) for any
-    thickness and end shape, where the CSF gets 0.12-1.35 (film_edge_force.py); free, the
-    whole film's force is the flux through its symmetry plane x = 0 (the same line force:
-    the stress divergence is antisymmetric) and none across it."""
+    """The line force for any thickness and end shape, where the CSF gets 0.12-1.35
+    (film_edge_force.py): 0.994 without the artificial stress (the 1D quadrature of the
+    kernel at R = 3 dx), 0.955-0.977 with it (eps = 0.3, its lattice gain; 0.887 for a free
+    film one row thick); free, the whole film's force is the flux through its symmetry
+    plane x = 0 (the same line force: the stress divergence is antisymmetric) and none
+    across it."""
+    from sphfem.fluid import axisymmetric_surface_stress as ss
+
     pull, total = end_pull(rows, wall, rounded)
-    assert pull == pytest.approx(0.994, abs=0.005)
+    lo = 0.88 if rows == 1 else 0.95
+    assert lo <= pull <= 1.0
     if not wall:
-        assert abs(total[0]) == pytest.approx(0.994, abs=0.005)
+        assert abs(total[0]) == pytest.approx(pull, abs=0.005)
         assert abs(total[1]) < 1e-9
+    eps, ss.ART_EPS = ss.ART_EPS, 0.0
+    try:
+        assert end_pull(rows, wall, rounded)[0] == pytest.approx(0.994, abs=0.005)
+    finally:
+        ss.ART_EPS = eps
 
 
 def test_retracting_film_impulse():
-    """Taylor-Culick retraction of a free film 4 rows thick: its x momentum is 2 sigma t
-    (0.994 of it, the quadrature) at every frame: the end is pulled by the line force
-    however the rim deforms."""
+    """Taylor-Culick retraction of a free film 4 rows thick: its x momentum is a constant
+    fraction of 2 sigma t (the static pull's, within 1 %) at every frame: the end is pulled
+    by the line force however the rim deforms."""
     sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "examples" / "axisymmetric"))
     import taylor_culick
 
     t, d, speed, _, mom = taylor_culick.retraction(4, "stress", length=10, t_end=3,
                                                    drift="removed", c0_factor=30)
-    assert np.all(np.abs(mom[t > 0] - 0.994) < 0.01)
+    pull = end_pull(4, False, False)[0]
+    assert np.all(np.abs(mom[t > 0] - pull) < 0.01 * pull)
     assert d[-1] > 1.0  # it retracts
     assert math.isfinite(speed)
