@@ -59,8 +59,8 @@ examples/axisymmetric/taylor_culick.py with ``--length 20 --t-end 8 --drift remo
 - a free film 4 rows thick retracting: momentum 0.994 x 2 sigma t at every frame, speed
   0.77 V_TC (the pair force 0.84, the CSF 0.59); on the wall (4 rows) 1.05-1.07 sigma t,
   speed 0.33;
-- 8 rows and more without an artificial stress: NOT stable.  The rim's rows fan out into strings and surface rings are
-  flung out (with the free-surface density hold), or, without the hold (the default for
+- 8 rows and more without an artificial stress: NOT stable.  The rim's rows fan out into
+  strings and surface rings are flung out (with the free-surface density hold), or, without the hold (the default for
   this model), a particle-scale wave runs from the rim into the film (pressure +-2e4 Pa
   from ring to ring, the tensile instability of the face rows under tension along the
   surface) and the momentum falls to 0.4-0.5 of 2 sigma t by 6-8 h / V_TC: the free film at
