@@ -60,14 +60,15 @@ examples/axisymmetric/taylor_culick.py with ``--length 20 --t-end 8 --drift remo
   0.77 V_TC (the pair force 0.84, the CSF 0.59); on the wall (4 rows) 1.05-1.07 sigma t,
   speed 0.33;
 - 8 rows and more without an artificial stress: NOT stable.  The rim's rows fan out into
-  strings and surface rings are flung out (with the free-surface density hold), or,
-  without the hold (the default for this model), a particle-scale wave runs from the rim into the film (pressure +-2e4 Pa
-  from ring to ring, the tensile instability of the face rows under tension along the
-  surface) and the momentum falls to 0.4-0.5 of 2 sigma t by 6-8 h / V_TC: the free film at
-  8 rows retracts at 0.72 V_TC, on the wall the rim does not form.  Neither stronger
+  strings and surface rings are flung out (with the free-surface density hold), or, without
+  the hold (the default for this model), a particle-scale wave runs from the rim into the film
+  (pressure +-2e4 Pa from ring to ring, the tensile instability of the face rows under tension
+  along the surface) and the momentum falls to 0.4-0.5 of 2 sigma t by 6-8 h / V_TC: the free
+  film at 8 rows retracts at 0.72 V_TC, on the wall the rim does not form.  Neither stronger
   shifting (A = 5, surface lambda 0.5) nor c0 = 60 V_TC changed that.
 - The 10 m/s impact (We 139, Re 3333) at D/dx 64 with the model without the artificial
-  stress, member 0: D_max/D 3.60 at 1.83 t_c, 4.2 % broken off, 164 s (the CSF's session-20 mean at 64: 4.03).  One run.
+  stress, member 0: D_max/D 3.60 at 1.83 t_c, 4.2 % broken off, 164 s (the CSF's session-20
+  mean at 64: 4.03).  One run.
 
 Artificial stress (:data:`ART_EPS`, 0.3 by default): the pair terms carry (1 - eps f^4),
 f = W(r) / W(s) (Monaghan 2000, J. Comput. Phys. 159: 290, applied to the tension: close
