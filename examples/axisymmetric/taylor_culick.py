@@ -47,8 +47,10 @@ with one free face).  Measured with ``--length 20 --t-end 8 --drift removed --mu
 30`` (momentum / (sigma t) over t >= 2, speed over sqrt(sigma / (rho h))): CSF 0.42-0.89
 at 4 rows (mu 1e-4, c0 10), 0.53-0.77 / speed 0.58 at 8, 0.57-0.88 / 0.33 at 16; pair force
 1.03-1.18 / 0.96 at 4 (mu 1e-4), 1.12-1.22 / 0.94 at 8, 1.23-1.69 / 1.05 at 16; the surface
-stress (``--meridian stress``, sphfem.fluid.axisymmetric_surface_stress) 1.05-1.07 at 4
-rows, unstable at 8.  No model gets the rim's pull within 10 % at 4-16 rows.  c0 must
+stress (``--meridian stress``, sphfem.fluid.axisymmetric_surface_stress, with its
+artificial stress and gain) 0.96-0.98 / 0.79 at 4 rows and 0.93-0.97 / 0.86 at 8, the rim
+compact and on the wall (without the artificial stress the 8-row rim is unstable).  The CSF
+and the pair force do not get the rim's pull within 10 % at 4-16 rows.  c0 must
 exceed the capillary wave speed sqrt(2 pi sigma / (rho R / 2)) (24.6 m/s at 16 rows, h = 8
 um): ``--c0 10`` (30 m/s) is marginal there.
 """
