@@ -852,6 +852,10 @@ class AxisymmetricFluid:
                     if surface_tension > 0.0 else None)
         if self.csf is not None:
             self.csf.plane = None if stress_plane is None else float(stress_plane)
+            if csf_meridian == "stress":
+                from sphfem.fluid.axisymmetric_surface_stress import surface_stress_forces
+
+                self.csf.stress_forces = surface_stress_forces
         self.wall_normals = None if wall_normals is None else np.asarray(
             wall_normals, float).reshape(n, 2)
         if wall_friction not in ("sph", "viscous", "layer", "none"):

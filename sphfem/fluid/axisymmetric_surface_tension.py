@@ -717,6 +717,9 @@ class AxisymmetricCSF:
         self.rho0 = None if rho0 is None else float(rho0)
         #: the wall plane z of the surface stress' images (meridian "stress"; None: none)
         self.plane = None
+        #: meridian "stress": the force function of :mod:`sphfem.fluid.
+        #: axisymmetric_surface_stress` (set by its user; that module imports this one)
+        self.stress_forces = None
         self.state = None
         self.kappa_m = self.kappa_h = np.zeros(0)
         #: film model, real rows of the last evaluation: weight phi, wall contact, the
@@ -746,10 +749,12 @@ class AxisymmetricCSF:
             st.omega[:n][bulk] = 0.0
         mirror_normals(n, src, mtype, st.g, st.omega)
         if self.meridian == "stress":  # the surface stress (its module) in place of the CSF
-            from sphfem.fluid.axisymmetric_surface_stress import surface_stress_forces
-
-            acc[:n] += surface_stress_forces(self, x, A, rho, kind, n, src, mtype, R,
-                                             float(Lz), self.plane)
+            if self.stress_forces is None:
+                raise ValueError('meridian = "stress" needs stress_forces = sphfem.fluid.'
+                                 'axisymmetric_surface_stress.surface_stress_forces (set '
+                                 'by AxisymmetricFluid)')
+            acc[:n] += self.stress_forces(self, x, A, rho, kind, n, src, mtype, R, float(Lz),
+                                          self.plane)
             return st
         csf_curvature(x, A, kc, offsets, indices, R, ks, kcode, period, TANGENT_MIN, st.g,
                       st.omega, st.kappa)
