@@ -78,7 +78,8 @@ Static pull then 0.955-0.977 of the line force (0.887 for a free single row); th
 8 rows thick retracts with a compact round rim at 0.77 V_TC, momentum 0.82-0.86 (without
 the gain); on the wall (without the gain) 0.86-0.88 at 4 rows and 0.82-0.87 at 8, speed
 0.74 / 0.80 sqrt(sigma / (rho h)), the rim on the wall.  With the gain: on the wall
-0.96-0.98 (4 rows, speed 0.79) and 0.93-0.97 (8 rows, 0.86) of sigma t; free 0.98 (4 rows,
+0.96-0.98 (4 rows, speed 0.79), 0.93-0.97 (8 rows, 0.86) and 0.92-1.03 (16 rows, 0.95) of
+sigma t; free 0.98 (4 rows,
 0.79 V_TC) and 0.91-0.96 (8 rows, 0.81 V_TC) of 2 sigma t.  The 10 m/s impact at D/dx 64
 with it comes apart (59 % of the mass broken off by 3.67 t_c, non-finite at 3.69 t_c): not
 yet usable for the impact.
