@@ -22,11 +22,14 @@ so the force on any group of rows is the flux of S through its edge: a film's en
 by the tension its cross-section carries, whatever the end's shape, and a thick body's face
 by sigma per face.  The tension per row is set so that the flux is exact on a lattice:
 
-- on the face of thick fluid, tau_i = sigma psi_i / Q_i with psi = omega |g| (the CSF's
-  colour gradient g with walls as liquid, i.e. a 90 degree wall, and its normal weight
-  omega) and Q_i = sum_j A_j w1(t_i . r_ij) psi_j t_i . M_j . t_i over the rows of the same
-  face (g_i . g_j > 0; w1 the kernel normalised in 1D, M_j the fluid moment matrix): the
-  integral of psi M_tt across the face, whose flux sum_rows s tau M_tt is then sigma;
+- on the face of thick fluid, tau_i = sigma psi_i / Q_i with psi = omega, the CSF's normal
+  weight of the colour gradient g of the fluid and its images (psi = omega |g|, tried
+  first, puts the tension mostly on the outer row; neither held an 8-row rim without the
+  artificial stress below), t normal to g, and Q_i the largest over
+  the row and its neighbours of sum_j A_j w1(t_i . r_ij) psi_j t_i . M_j . t_i over the rows
+  of the same face (g_i . g_j > 0; w1 the kernel normalised in 1D, M_j the fluid moment
+  matrix): the integral of psi M_tt across the face, whose flux sum_rows s tau M_tt is
+  then sigma;
 - in films thinner than about the support (weight phi of the film model), the film model's
   S = tau t t with tau = gamma / Q, gamma = 2 sigma free and sigma on a wall
   (:mod:`sphfem.fluid.axisymmetric_surface_tension`, "Thin films");
@@ -102,8 +105,6 @@ from sphfem.smallmat import pair_sep
 #: floor of Q as a fraction of psi_i times a one-row film's Q (an isolated ring with a
 #: colour gradient would otherwise get tau ~ 1 / Q unbounded)
 FACE_Q_MIN = 0.5
-PSI_GRAD = False
-Q_SPREAD = True
 #: artificial stress on the tension (Monaghan 2000; 0: off)
 ART_EPS = 0.3
 
@@ -195,24 +196,23 @@ def art_stress_gain(eps: float, R_over_s: float, kernel_code: int) -> float:
 
 def face_tension(csf, x, A, fl, n, offsets, indices, R, period, g, omega, M, src, mtype):
     """The face tension tau (augmented rows, 0 off the faces) and the face tangent (module
-    docstring): tau_i = sigma psi_i / Q_i, psi = omega |g|."""
+    docstring): tau_i = sigma psi_i / Q_i, psi = omega."""
     from sphfem.fluid.axisymmetric_surface_tension import row_moment
 
     kcode = csf.kernel_code
     gn = np.sqrt(g[:, 0] ** 2 + g[:, 1] ** 2)
-    psi = np.where(fl & (gn > 0.0), omega * (gn if PSI_GRAD else 1.0), 0.0)
+    psi = np.where(fl & (gn > 0.0), omega, 0.0)
     nz = np.where(gn > 0.0, gn, 1.0)
     tang = np.column_stack([-g[:, 1] / nz, g[:, 0] / nz])
     Q = np.zeros(x.shape[0])
     face_moment(x, A, fl, n, offsets, indices, R, kernels.kernel_sigma(kcode, 1, R), kcode,
                 period, tang, g, psi, M, Q)
-    if Q_SPREAD:
-        from sphfem.fluid.axisymmetric_surface_tension import film_max, mirror_scalar
+    from sphfem.fluid.axisymmetric_surface_tension import film_max, mirror_scalar
 
-        mirror_scalar(n, src, Q)
-        Qm = np.zeros_like(Q)
-        film_max(x, fl, n, offsets, indices, R, period, Q, Qm)
-        Q = Qm
+    mirror_scalar(n, src, Q)  # Q the largest over the row and its neighbours (as the film's)
+    Qm = np.zeros_like(Q)
+    film_max(x, fl, n, offsets, indices, R, period, Q, Qm)
+    Q = Qm
     sp = np.sqrt(np.maximum(A, 1e-300))
     Qf = np.maximum(Q, FACE_Q_MIN * psi * row_moment(sp, R, kcode))
     tau = np.where(Qf > 0.0, csf.sigma * psi / np.where(Qf > 0.0, Qf, 1.0), 0.0)

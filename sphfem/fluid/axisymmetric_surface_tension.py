@@ -736,6 +736,14 @@ class AxisymmetricCSF:
         m = x.shape[0]
         self._R = float(R)
         st = self.state = csf_state(self.state, m, 2)
+        if self.meridian == "stress":  # the surface stress (its module) in place of the CSF
+            if self.stress_forces is None:
+                raise ValueError('meridian = "stress" needs stress_forces = sphfem.fluid.'
+                                 'axisymmetric_surface_stress.surface_stress_forces (set '
+                                 'by AxisymmetricFluid)')
+            acc[:n] += self.stress_forces(self, x, A, rho, kind, n, src, mtype, R, float(Lz),
+                                          self.plane)
+            return st  # the CSF passes below are not needed
         kc = colour_kinds(kind)
         period = np.array([0.0, float(Lz)])
         ks = kernels.kernel_sigma(self.kernel_code, 2, R)
@@ -748,14 +756,6 @@ class AxisymmetricCSF:
                 np.asarray(lam, float)[:n] >= self.axis_lambda_gate)
             st.omega[:n][bulk] = 0.0
         mirror_normals(n, src, mtype, st.g, st.omega)
-        if self.meridian == "stress":  # the surface stress (its module) in place of the CSF
-            if self.stress_forces is None:
-                raise ValueError('meridian = "stress" needs stress_forces = sphfem.fluid.'
-                                 'axisymmetric_surface_stress.surface_stress_forces (set '
-                                 'by AxisymmetricFluid)')
-            acc[:n] += self.stress_forces(self, x, A, rho, kind, n, src, mtype, R, float(Lz),
-                                          self.plane)
-            return st
         csf_curvature(x, A, kc, offsets, indices, R, ks, kcode, period, TANGENT_MIN, st.g,
                       st.omega, st.kappa)
         self.kappa_m = st.kappa.copy()
