@@ -513,6 +513,37 @@ def test_free_surface_no_tension_keeps_the_sheet_volume():
     assert res[True] < 1e-4 < res[False]
 
 
+def test_surface_hold_follows_the_surface_tension_model():
+    """The step's surface hold (rho >= rho0 for lambda < 0.75) applies everywhere with the
+    CSF and the surface stress, only within the CSF's axis band with the pair force (whose
+    tension lives in the surface rings' pressure), nowhere without
+    ``free_surface_no_tension``.  A drop of rings below rho0: after one step the surface
+    rings are at rho0 exactly where the model holds them."""
+    from sphfem.fluid.axisymmetric_pair_tension import PAIR_AXIS_BAND
+
+    dx, D = 2e-6, 1e-4  # the band (12 dx) inside the drop's radius (25 dx)
+    g = (np.arange(-25, 25) + 0.5) * dx
+    rr, zz = np.meshgrid(g[g > 0], g, indexing="ij")
+    x = np.column_stack([rr.ravel(), zz.ravel()])
+    x = x[(x**2).sum(axis=1) <= (D / 2) ** 2]
+    R = 3 * dx
+    for meridian, hold, want in (("csf", True, math.inf), ("stress", True, math.inf),
+                                 ("pair", True, PAIR_AXIS_BAND[1] * R), ("csf", False, 0.0)):
+        pa = FluidParams(rho0=1000.0, c0=100.0, mu=1e-3, delta=0.1, alpha=0.02)
+        f = AxisymmetricFluid(x, np.zeros_like(x), np.full(len(x), 990.0),
+                              np.full(len(x), FLUID), ring_mass(x[:, 0], 1000.0, dx * dx), 0.0,
+                              R, pa, surface_tension=0.072, csf_meridian=meridian,
+                              free_surface_no_tension=hold)
+        assert f.surface_hold_radius() == pytest.approx(want)
+        f.step(0.1 * f.stable_dt())
+        surf = f.lam < 0.75
+        held = surf & (np.abs(f.x[:, 0]) < want)
+        assert np.all(f.rho[held] == 1000.0), meridian
+        assert np.all(f.rho[surf & ~held] < 1000.0), meridian
+        if meridian == "pair":
+            assert held.any() and (surf & ~held).any()
+
+
 def test_shifting_evens_the_cover_and_keeps_the_surface():
     """Particle shifting (``shifting`` = A): on a perturbed lattice of rings moving at a
     uniform speed, grad C = sum_j A_j grad W_ij classifies the top row as surface (lambda <
