@@ -2,6 +2,8 @@
 results of the passes they replace to the bit (benchmarks/README.md, "axisymmetric droplet
 job, per-step cost")."""
 
+import math
+
 import numpy as np
 import pytest
 
@@ -104,7 +106,7 @@ def test_step_kernels_equal_the_numpy_updates_bitwise():
     Rho[s] = rho0
     x2, v2, rho2 = x.copy(), v.copy(), rho.copy()
     vn2, rhon2 = np.empty((fi.size, 2)), np.empty(fi.size)
-    _predict(fi, x2, v2, rho2, acc, drho, 0.5 * dt, vn2, rhon2, lam, True, rho0)
+    _predict(fi, x2, v2, rho2, acc, drho, 0.5 * dt, vn2, rhon2, lam, math.inf, rho0)
     assert np.array_equal(X, x2) and np.array_equal(V, v2) and np.array_equal(Rho, rho2)
     assert np.array_equal(v_n, vn2) and np.array_equal(rho_n, rhon2)
     V[fl] = v_n + dt * acc[fl]
@@ -112,8 +114,16 @@ def test_step_kernels_equal_the_numpy_updates_bitwise():
     s = fl & (lam < 0.75) & (Rho < rho0)
     Rho[s] = rho0
     X[fl] += 0.5 * dt * V[fl]
-    _correct(fi, x2, v2, rho2, acc, drho, dt, 0.5 * dt, vn2, rhon2, lam, True, rho0)
+    _correct(fi, x2, v2, rho2, acc, drho, dt, 0.5 * dt, vn2, rhon2, lam, math.inf, rho0)
     assert np.array_equal(X, x2) and np.array_equal(V, v2) and np.array_equal(Rho, rho2)
+    # the hold only within |r| < hold_r (the pair force's axis band)
+    x3, v3, rho3 = x.copy(), v.copy(), rho.copy()
+    _predict(fi, x3, v3, rho3, acc, drho, 0.5 * dt, vn2, rhon2, lam, 0.5, rho0)
+    Rho3 = rho.copy()
+    Rho3[fl] += 0.5 * dt * drho[fl]
+    s3 = fl & (lam < 0.75) & (Rho3 < rho0) & (np.abs(x3[:, 0]) < 0.5)
+    Rho3[s3] = rho0
+    assert np.array_equal(Rho3, rho3) and s3.any() and (s & ~s3).any()
     # reflection at the axis and at a wall plane
     zw = 0.1
     neg = fl & (X[:, 0] < 0.0)
