@@ -14,8 +14,9 @@ Measured (session 23, a = 20 dx, c0 = 50 m/s, water sigma 0.072):
   currents 0.03-0.27 m/s, mean pressure oscillating about 2 sigma / a;
 * ``stress`` (experimental, :mod:`sphfem.fluid.axisymmetric_surface_stress`): the pole rises
   2.3 dx by 0.5 t_cap and the drop blows apart by 1-1.5 t_cap (|v| 40-200 m/s), with or
-  without its hoop term and with or without the artificial stress -- so the model does not
-  hold a curved surface crossing the axis, which is what breaks the impact's lamella.
+  without its hoop term and with or without the artificial stress; a torus of the same
+  cross-section at r = 3 a (no row near the axis) blows up as fast -- the model does not
+  hold a closed curved face, which is what breaks the impact's lamella.
 """
 
 from __future__ import annotations

@@ -104,6 +104,11 @@ impact, none fixed yet:
 - from ~1.5 t_c the lamella breaks up (54 % of the mass off the main body by 2.35 t_c with
   the thresholds 0.5 / 1.0; 6-7 % with 0.3 / 0.9, :data:`ART_EPS` 0.3 or 0; D_max/D 3.36-3.60).
 
+The root: the model does not hold a drop at rest (examples/axisymmetric/resting_drop.py:
+a drop of radius 20 dx blows apart by 1-1.5 capillary times, with or without the hoop term
+or the artificial stress, and so does a torus of the same cross-section away from the
+axis); the CSF keeps both calm.  Fix that first.
+
 :data:`ART_FLOOR` bounds the artificial-stress factor from below (-inf: unbounded, the
 default; 0 tried, 7.4 % broken off).
 
