@@ -515,12 +515,12 @@ def test_resting_drop_stays_at_rest():
     0.6-1.7, the acoustic transient of a drop started at rho0).  The surface stress
     (``csf_meridian = "stress"``) fails this: its pole rises 2.3 dx by 0.5 t_cap and the drop
     blows apart by 1.5 t_cap (the script's docstring)."""
-    import sys
     from pathlib import Path
 
-    sys.path.insert(0, str(Path(__file__).resolve().parents[1] / "examples" / "axisymmetric"))
-    import resting_drop
+    from builders import load_example
 
+    resting_drop = load_example(Path(__file__).resolve().parents[1] / "examples"
+                                / "axisymmetric" / "resting_drop.py", "resting_drop")
     rows = np.array(resting_drop.resting_drop("csf", 20, 2.0))
     assert rows[-1, 0] >= 1.5  # it ran to the end (finite)
     assert np.all(np.abs(rows[:, 1] - 19.5) < 0.5) and np.all(np.abs(rows[:, 2] - 19.5) < 0.5)

@@ -17,6 +17,16 @@ from sphfem.fluid.wcsph import FluidParams
 from sphfem.particles import FLUID, WALL
 
 
+def _ring_drop(dx: float, half_rows: int, radius: float) -> np.ndarray:
+    """(r, z) of the rings of a lattice of spacing ``dx`` (columns at r = dx / 2, 3 dx / 2,
+    ..., rows at z = +-dx / 2, ..., ``half_rows`` each side) inside the sphere of
+    ``radius`` about the origin."""
+    g = (np.arange(-half_rows, half_rows) + 0.5) * dx
+    rr, zz = np.meshgrid(g[g > 0], g, indexing="ij")
+    x = np.column_stack([rr.ravel(), zz.ravel()])
+    return x[(x**2).sum(axis=1) <= radius**2]
+
+
 def block(N):
     """All-fluid lattice r in (0, 1), z in (-1/2, 1/2); masks of rows whose support lies
     inside (``inner``) and of those among them within R of the axis (``axis``)."""
@@ -194,11 +204,7 @@ def test_free_sheet_stretching_stays_calm():
     inconsistent: pressures reached -12 / +21 rho V^2 at t = 0.7 ln 3 / a and the sheet
     blew up."""
     dx, D, a = 6.25e-6, 1e-4, 1e5
-    n = 9
-    g = (np.arange(-n, n) + 0.5) * dx
-    rr, zz = np.meshgrid(g[g > 0], g, indexing="ij")
-    x = np.column_stack([rr.ravel(), zz.ravel()])
-    x = x[(x**2).sum(axis=1) <= (D / 2) ** 2]
+    x = _ring_drop(dx, 9, D / 2)
     v = np.column_stack([a * x[:, 0], -2 * a * x[:, 1]])
     pa = FluidParams(rho0=1000.0, c0=100.0, mu=1e-3, delta=0.1, alpha=0.02)
     f = AxisymmetricFluid(x, v, np.full(len(x), 1000.0), np.full(len(x), FLUID),
@@ -495,10 +501,7 @@ def test_free_surface_no_tension_keeps_the_sheet_volume():
     rings' misjudged one-sided divergence lowers their density) and |p| stays lower
     (0.68e5 against 1.14e5 Pa)."""
     dx, D, a = 6.25e-6, 1e-4, 1e5
-    g = (np.arange(-9, 9) + 0.5) * dx
-    rr, zz = np.meshgrid(g[g > 0], g, indexing="ij")
-    x = np.column_stack([rr.ravel(), zz.ravel()])
-    x = x[(x**2).sum(axis=1) <= (D / 2) ** 2]
+    x = _ring_drop(dx, 9, D / 2)
     v = np.column_stack([a * x[:, 0], -2 * a * x[:, 1]])
     res = {}
     for hold in (False, True):
@@ -522,10 +525,7 @@ def test_surface_hold_follows_the_surface_tension_model():
     from sphfem.fluid.axisymmetric_pair_tension import PAIR_AXIS_BAND
 
     dx, D = 2e-6, 1e-4  # the band (12 dx) inside the drop's radius (25 dx)
-    g = (np.arange(-25, 25) + 0.5) * dx
-    rr, zz = np.meshgrid(g[g > 0], g, indexing="ij")
-    x = np.column_stack([rr.ravel(), zz.ravel()])
-    x = x[(x**2).sum(axis=1) <= (D / 2) ** 2]
+    x = _ring_drop(dx, 25, D / 2)
     R = 3 * dx
     for meridian, hold, want in (("csf", True, math.inf), ("stress", True, math.inf),
                                  ("pair", True, PAIR_AXIS_BAND[1] * R), ("csf", False, 0.0)):
@@ -910,10 +910,7 @@ def test_axis_floor_lifts_a_ring_off_the_axis_and_spares_the_planar_mode():
     sits at or above the floor dx / 4 (0.4 dx, reflected) and no ring is below it; in the
     planar mode x = 0 is a symmetry plane, not an axis, and the floor does not act."""
     dx, R = 1.0 / 16, 3.0 / 16
-    g = (np.arange(-8, 8) + 0.5) * dx
-    rr, zz = np.meshgrid(g[g > 0], g, indexing="ij")
-    x = np.column_stack([rr.ravel(), zz.ravel()])
-    x = x[(x**2).sum(axis=1) <= 0.5**2]
+    x = _ring_drop(dx, 8, 0.5)
     k = int(np.argmin(np.abs(x[:, 0] - 0.5 * dx) + np.abs(x[:, 1] - 0.5 * dx)))
     x[k, 0] = 0.1 * dx
     pa = FluidParams(rho0=1.0, c0=10.0, mu=0.01, delta=0.1)

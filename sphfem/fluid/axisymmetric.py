@@ -1175,14 +1175,14 @@ class AxisymmetricFluid:
             self._advance_layer(dt)
         v_n = np.empty((fi.shape[0], 2))
         rho_n = np.empty(fi.shape[0])
-        hold, rho0 = self.surface_hold_radius(), float(self.params.rho0)
+        hold_r, rho0 = self.surface_hold_radius(), float(self.params.rho0)
         # the numpy updates x[fl] += 0.5 dt v[fl], ... and the surface hold, per row
         _predict(fi, self.x, self.v, self.rho, self.acc, self.drho, 0.5 * dt, v_n, rho_n,
-                 self.lam, hold, rho0)
+                 self.lam, hold_r, rho0)
         self._reflect()
         self.evaluate()
         _correct(fi, self.x, self.v, self.rho, self.acc, self.drho, dt, 0.5 * dt, v_n, rho_n,
-                 self.lam, hold, rho0)
+                 self.lam, hold_r, rho0)
         if self.shifting > 0.0:
             self._shift(dt)
         self._reflect()

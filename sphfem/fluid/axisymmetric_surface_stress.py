@@ -109,8 +109,8 @@ a drop of radius 20 dx blows apart by 1-1.5 capillary times, with or without the
 or the artificial stress, and so does a torus of the same cross-section away from the
 axis); the CSF keeps both calm.  Fix that first.
 
-:data:`ART_FLOOR` bounds the artificial-stress factor from below (-inf: unbounded, the
-default; 0 tried, 7.4 % broken off).
+An artificial-stress factor floored at 0 (max(1 - eps f^4, 0)) was tried there too: 7.4 %
+broken off, no better; not kept.
 
 Not modelled: contact angles other than 90 degrees.  Experimental: off by default.
 """
@@ -124,6 +124,7 @@ from numba import njit, prange
 
 from sphfem import kernels
 from sphfem.fluid.passes import grad_factor
+from sphfem.fluid.surface_tension_csf import NORMAL_HI, NORMAL_LO
 from sphfem.kernels import kernel_f
 from sphfem.smallmat import pair_sep
 
@@ -131,12 +132,11 @@ from sphfem.smallmat import pair_sep
 #: colour gradient would otherwise get tau ~ 1 / Q unbounded)
 FACE_Q_MIN = 0.5
 #: the face weight psi: smoothstep of |g| R from FACE_G_LO to FACE_G_HI (the outer row of
-#: a lattice face has |g| R = 1.26 at R = 3 s, the next 0.23)
-FACE_G_LO, FACE_G_HI = 0.3, 0.9
+#: a lattice face has |g| R = 1.26 at R = 3 s, the next 0.23); by default the CSF's normal
+#: weight omega's thresholds, so psi = omega
+FACE_G_LO, FACE_G_HI = NORMAL_LO, NORMAL_HI
 #: artificial stress on the tension (Monaghan 2000; 0: off)
 ART_EPS = 0.3
-#: the pair factor (1 - eps f^4) is not let below this (-inf: unbounded)
-ART_FLOOR = -math.inf
 
 
 @njit(cache=True, parallel=True)
@@ -172,12 +172,10 @@ def face_moment(x, A, fl, n, offsets, indices, R, sigma1, kernel_code, period, t
 
 
 @njit(cache=True, parallel=True)
-def stress_force(x, A, rho, n, offsets, indices, R, fac2, kernel_code, period, S, eps, floor,
-                 acc):
+def stress_force(x, A, rho, n, offsets, indices, R, fac2, kernel_code, period, S, eps, acc):
     """acc[i] = 1 / rho_i sum_j A_j (S_i + S_j) (1 - eps f_ij^4) . grad_i W_ij (eq. S2) of the
     rows i < n over their listed neighbours; S = (S_rr, S_rz, S_zz); f_ij = W(r_ij) /
-    W(sqrt(A_i)) (the artificial stress of Monaghan 2000 on the tension; eps = 0: off), the
-    factor not below ``floor``."""
+    W(sqrt(A_i)) (the artificial stress of Monaghan 2000 on the tension; eps = 0: off)."""
     R2 = R * R
     periodic = period[0] > 0.0 or period[1] > 0.0
     for i in prange(n):
@@ -193,7 +191,7 @@ def stress_force(x, A, rho, n, offsets, indices, R, fac2, kernel_code, period, S
             t = A[j] * grad_factor(math.sqrt(d2), R, fac2, kernel_code)
             if eps > 0.0:
                 fij = kernel_f(math.sqrt(d2) / R, kernel_code) / wdx
-                t *= max(1.0 - eps * fij * fij * fij * fij, floor)
+                t *= 1.0 - eps * fij * fij * fij * fij
             srr = S[i, 0] + S[j, 0]
             srz = S[i, 1] + S[j, 1]
             szz = S[i, 2] + S[j, 2]
@@ -203,8 +201,7 @@ def stress_force(x, A, rho, n, offsets, indices, R, fac2, kernel_code, period, S
         acc[i, 1] = f1 / rho[i]
 
 
-def art_stress_gain(eps: float, R_over_s: float, kernel_code: int,
-                    floor: float = -math.inf) -> float:
+def art_stress_gain(eps: float, R_over_s: float, kernel_code: int) -> float:
     """The factor that restores the flux of a uniform tension through a cut of the square
     lattice of spacing s when the pairs carry (1 - eps f^4) (:func:`stress_force`):
     sum F (t . r)^2 / sum F (1 - eps f^4) (t . r)^2 over the lattice within the support."""
@@ -223,7 +220,7 @@ def art_stress_gain(eps: float, R_over_s: float, kernel_code: int,
             F = grad_factor(d, R, fac2, kernel_code)
             f = kernel_f(d / R, kernel_code) / w1
             full += F * a * a
-            art += F * max(1.0 - eps * f**4, floor) * a * a
+            art += F * (1.0 - eps * f**4) * a * a
     return full / art
 
 
@@ -311,10 +308,10 @@ def surface_stress_forces(csf, x, A, rho, kind, n, src, mtype, R, Lz, plane) -> 
                           tang_f[:, 1] ** 2])
     S = phi[:, None] * f["S"] + (1.0 - phi)[:, None] * (tau_f[:, None] * tf)
     if ART_EPS > 0.0:
-        S *= art_stress_gain(ART_EPS, R / float(np.sqrt(np.median(As[:k]))), kc, ART_FLOOR)
+        S *= art_stress_gain(ART_EPS, R / float(np.sqrt(np.median(As[:k]))), kc)
     fac2 = kernels.kernel_sigma(kc, 2, R) / (R * R)
     acc = np.zeros((k, 2))
-    stress_force(xs, As, rs, k, off, ind, R, fac2, kc, period, S, ART_EPS, ART_FLOOR, acc)
+    stress_force(xs, As, rs, k, off, ind, R, fac2, kc, period, S, ART_EPS, acc)
     csf.stress_planar = acc.copy()
     csf.stress_phi = phi[:k].copy()
     if csf.hoop:
