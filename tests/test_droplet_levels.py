@@ -105,6 +105,29 @@ def test_convergence_script_reads_levels_from_an_earlier_json(tmp_path, capsys):
                    "--t-end-tc", "4", "--figures-from", str(src)])
 
 
+
+def test_convergence_script_runs_one_level_without_criteria(tmp_path, capsys):
+    """convergence.py --levels N (one machine per level): the level's figures are printed,
+    no criteria are judged and no convergence file is written; a non-positive level is
+    refused."""
+    import json
+
+    conv = _convergence_script()
+    figs = manufactured((90,), 10.0, C=0.5)
+    for f in figs:
+        f.update(t_end=4.0 * f["tc"], wall_s=1.0, correlations=list(f["correlations"]))
+    src = tmp_path / "earlier.json"
+    src.write_text(json.dumps({"speed": 10.0, "levels": [90], "figures": figs}))
+    out = tmp_path / "out"
+    assert conv.main(["10", "--out", str(out), "--levels", "90", "--t-end-tc", "4",
+                      "--figures-from", str(src)]) == 0
+    printed = capsys.readouterr().out
+    assert "D/dx 90: spread" in printed and "the criteria need three" in printed
+    assert "PASS" not in printed and "FAIL" not in printed
+    assert not (out / "convergence_V10.json").exists()
+    with pytest.raises(SystemExit):
+        conv.main(["10", "--out", str(out), "--levels", "0", "90", "128"])
+
 def _summary(V=10.0, D=1e-4, dx=1e-4 / 90, t_contact=1e-7, root=1.0, tip=1.2, lamella=1.0):
     """A summary.json of a run whose lamella root follows root x Wagner's sqrt(6 t / t_c),
     whose contact diameter tip x Wagner and whose thickness at the axis lamella x the
