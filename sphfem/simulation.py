@@ -34,6 +34,7 @@ from sphfem.output import ParticleSeries, atomic_write_bytes, write_json
 from sphfem.particles import GHOST
 from sphfem.physics import build_modules
 from sphfem.progress import StageLog, peak_rss_mb, process_s, say, stage
+from sphfem.step_watch import StepCollapseWatch
 
 logger = logging.getLogger(__name__)
 
@@ -138,6 +139,7 @@ class Simulation:
         filters = {getattr(m, "neighbor_filter", None) for m in self.modules}
         self.ctx.pair_filter = filters.pop() if len(filters) == 1 else None
         self.steps_above_limit = 0
+        self.step_watch = StepCollapseWatch()  # collapsed steps, reported (run)
         self._earlier = None  # a resumed run: step, time and seconds before this process
         skin = scene.sph.skin
         self.skin = (0.15 if self.moving else 0.0) if skin is None else skin
@@ -355,6 +357,7 @@ class Simulation:
             mod.start(self.ctx)
         next_out = self.t + every if every else np.inf
         dts, limiter_counts = [], {}
+        self.step_watch = StepCollapseWatch()
         limit_min = np.inf  # smallest step the limits allowed (before output/end truncation)
         status, message = "completed", ""
         say(f"stepping from t = {self.t:.4g} s to {t_end:.4g} s ({self.particles.n} "
@@ -371,6 +374,13 @@ class Simulation:
                     break
                 dt, limiter = self.stable_dt()
                 limit_min = min(limit_min, dt)
+                ep = self.step_watch.observe(self.t, dt, limiter)
+                if ep is not None:
+                    logger.warning(
+                        "the time step collapsed at t = %.6g s: %.3g s (set by %s) against "
+                        "%.3g s before, for %d steps so far; the run will crawl (see "
+                        "summary.json dt.collapses)", ep["t"], ep["dt"], ep["limiter"],
+                        ep["reference_dt"], ep["steps"])
                 dt = min(dt, t_end - self.t)
                 if every and exact_times:
                     dt = min(dt, max(next_out - self.t, 1e-300))
@@ -449,7 +459,8 @@ class Simulation:
             "particle_steps_per_s": n * len(dts_list) / wall if wall > 0 else None,
             "dt": {"min": float(dts.min()), "max": float(dts.max()), "mean": float(dts.mean()),
                    "controlling_limit_counts": limiter_counts,
-                   "steps_above_stable_limit": self.steps_above_limit},
+                   "steps_above_stable_limit": self.steps_above_limit,
+                   "collapses": list(self.step_watch.episodes)},
             "neighbors": {"pairs": self.nbrs.n_pairs, "mean_per_particle": self.nbrs.n_pairs / n
                           if n else 0.0},
             "diagnostics": {m.name: m.diagnostics(self.ctx) for m in self.modules},
