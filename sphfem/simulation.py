@@ -357,7 +357,6 @@ class Simulation:
             mod.start(self.ctx)
         next_out = self.t + every if every else np.inf
         dts, limiter_counts = [], {}
-        self.step_watch = StepCollapseWatch()
         limit_min = np.inf  # smallest step the limits allowed (before output/end truncation)
         status, message = "completed", ""
         say(f"stepping from t = {self.t:.4g} s to {t_end:.4g} s ({self.particles.n} "

@@ -33,8 +33,8 @@ class StepCollapseWatch:
             raise ValueError("StepCollapseWatch: steps and memory must be >= 1")
         self.factor, self.steps, self.memory = float(factor), int(steps), int(memory)
         self.log_ref: float | None = None
-        self.run = 0            # consecutive collapsed steps
-        self.active = False     # inside a reported episode
+        self.run = 0            # consecutive collapsed steps (> steps: inside an episode)
+        self.run_min = math.inf  # the smallest of them
         self.episodes: list[dict] = []
 
     def observe(self, t: float, dt: float, limiter: str) -> dict | None:
@@ -50,17 +50,15 @@ class StepCollapseWatch:
         new = None
         if dt < self.factor * ref:
             self.run += 1
-            if self.active:
-                ep = self.episodes[-1]
-                ep["steps"] += 1
-                ep["min_dt"] = min(ep["min_dt"], dt)
-            elif self.run >= self.steps:
-                self.active = True
+            self.run_min = min(self.run_min, float(dt))
+            if self.run == self.steps:
                 new = {"t": float(t), "dt": float(dt), "reference_dt": ref,
-                       "limiter": str(limiter), "steps": self.run, "min_dt": float(dt)}
+                       "limiter": str(limiter), "steps": self.run, "min_dt": self.run_min}
                 self.episodes.append(new)
+            elif self.run > self.steps:
+                ep = self.episodes[-1]
+                ep["steps"], ep["min_dt"] = self.run, self.run_min
         else:  # the reference follows the steps that are not collapsed only
-            self.run = 0
-            self.active = False
+            self.run, self.run_min = 0, math.inf
             self.log_ref += (lg - self.log_ref) / self.memory
         return new
