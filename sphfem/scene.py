@@ -458,7 +458,8 @@ def _resolve_blocks(blocks, materials, domain, sph, ctx) -> tuple:
                                 f"axis {AXES[a]}: [{lo[a]:g}, {hi[a]:g}] is not within "
                                 f"[{domain.lo[a]:g}, {domain.hi[a]:g}]")
         dx = b.dx if b.dx is not None else sph.dx
-        estimate = Shape.from_block(b, ctx.dim).volume() / dx**ctx.dim
+        # (vol^(1/d) / dx)^d: dx^d alone overflows a float for dx > ~1e103 (3D)
+        estimate = (Shape.from_block(b, ctx.dim).volume() ** (1.0 / ctx.dim) / dx) ** ctx.dim
         if not estimate <= MAX_PARTICLES_PER_BLOCK:
             ctx.error(f"{path}.dx" if b.dx is not None else "sph.dx",
                       f"block {b.name!r} would get about {estimate:.3g} particles (limit "
