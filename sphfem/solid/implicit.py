@@ -301,9 +301,23 @@ class Preconditioner:
             mf = np.repeat(body.m, body.dim)[self.free]
             K = (K + sp.diags(shift * mf)).tocsr()
         self.n = K.shape[0]
+        self.regularised = 0.0  # the mass shift added when K alone is singular
         if self.n <= direct_max:
             self.kind = "splu"
-            lu = spla.splu(K.tocsc(), permc_spec="COLAMD")
+            try:
+                lu = spla.splu(K.tocsc(), permc_spec="COLAMD")
+            except RuntimeError as err:  # "Factor is exactly singular": a free rigid mode
+                if "singular" not in str(err):
+                    raise
+                # a body held against some rigid motions only (rollers along x leave the
+                # y translation free) has a null space the residual never excites; a shift
+                # 1e-10 x the mean stiffness diagonal makes it invertible without changing
+                # the step in the loaded directions beyond 1e-10 (it only preconditions)
+                mf = np.repeat(body.m, body.dim)[self.free]
+                reg = 1e-10 * float(np.abs(K.diagonal()).mean()) / float(mf.mean())
+                K = (K + sp.diags(reg * mf)).tocsr()
+                lu = spla.splu(K.tocsc(), permc_spec="COLAMD")
+                self.regularised = reg
             self._apply = lu.solve
         else:
             import pyamg
