@@ -223,9 +223,17 @@ class AxisymmetricFluidModule(PhysicsModule):
     no_penetration = True
     #: the free-surface and wall treatment of the (r, z) fluid (AxisymmetricFluid's keywords;
     #: examples/axisymmetric/robustness_results.md): fixed h (h from the ring's own area
-    #: threw first-column rings out at D/dx = 32), wall pressure clipped at 0 (no suction
-    #: of the contact line into the wall), surface rings held at rho >= rho0.  With
+    #: threw first-column rings out at D/dx = 32), surface rings held at rho >= rho0.  With
     #: ``[fluid] shifting`` the impact at 50 m/s, D/dx = 32 runs calm to 4 tc.
+    #: The wall's extrapolated pressure keeps its sign (``wall_tension=True``): clipping it
+    #: at 0 (2026-12-02, before the surface hold existed, when tension copied from the
+    #: lamella's tip pulled rings into the wall) left nothing holding the axis-wall corner
+    #: down; its rings lifted 1-2 dx off the wall at 0.8-1.1 t_c (10 m/s, D/dx 181), the
+    #: corner "boiled" and the coarse levels spread too far.  With the sign kept, the 10 m/s
+    #: levels D/dx 64 / 90 / 128 give heat 51.7 / 52.5 / 50.1 uJ, rise 18.70 / 18.42 / 18.46
+    #: K, peak von Mises 54.9 / 53.9 / 54.8 MPa, D_max/D 3.67 / 3.61 / 3.41 (clipped: 61.8 /
+    #: 49.4 / 49.7 uJ, 19.65 / 19.60 / 18.35 K, 59.6 / 61.8 / 61.9 MPa, 4.45 / 3.45 / 3.43;
+    #: docs/validation/droplet_impact/README.md, session 26)
     #: Fragments (lambda_min < renorm_lambda_min: isolated rings, one-ring sheets) carry no
     #: hoop term in their continuity (``fragment_hoop=False``): a free ring has no
     #: neighbour to show the meridional spreading that balances -rho v_r / r, so with it
@@ -244,7 +252,7 @@ class AxisymmetricFluidModule(PhysicsModule):
     #: centre of the 10 m/s lamella flowed inwards and broke up from 2.0-2.6 t_c at D/dx 90
     #: and 128 (and 181), with it the centre stays whole to 4 t_c at 128 (session 13,
     #: docs/validation/droplet_impact/README.md)
-    fluid_options = {"adaptive_h": False, "wall_tension": False,
+    fluid_options = {"adaptive_h": False, "wall_tension": True,
                      "free_surface_no_tension": True, "fragment_hoop": False,
                      "csf_axis_curvature": True, "csf_curvature_smoothing": 2.0}
     #: rings are kept at r >= AXIS_FLOOR_DX dx (the fluid's spacing; the lattice's first

@@ -2,7 +2,8 @@
 wall-friction study in docs/validation/droplet_impact/README.md, session 9).
 
     python examples/droplet_impact/level_run.py V N T_END_TC OUT [--wall-radius R] [--resume]
-                                                [--fluid-only] [--every TC] [key=value ...]
+                                                [--fluid-only] [--every TC]
+                                                [--fluid-option KEY=VALUE ...] [key=value ...]
 
 V the impact speed [m/s] (c0 = 10 V), N particles across the droplet, T_END_TC the end time in
 t_c = D / V; ``--wall-radius`` widens the SPH wall, the domain and the lateral heat refinement
@@ -12,9 +13,14 @@ checkpoint when there is one (the run writes one at every output and keeps the l
 completed level can be continued to a later T_END_TC; without the flag an existing OUT is
 overwritten); ``--fluid-only`` runs the fluid alone (no heat, no substrate: the cheap way to
 look at the flow, e.g. the axis frames of ``axis_frames.py``); ``--every`` writes the
-particles every TC t_c (default T_END_TC / 4).  Prints the validation's figures of the
-run (:func:`sphfem.validation.droplet_impact.figures`; with ``--fluid-only`` the summary's
-fluid figures).
+particles every TC t_c (default T_END_TC / 4); ``--fluid-option KEY=VALUE`` (repeatable)
+overrides one of the axisymmetric fluid's treatment keywords
+(:attr:`sphfem.axisymmetric_scene.AxisymmetricFluidModule.fluid_options`, e.g.
+``wall_tension=False``, or any other keyword of
+:class:`sphfem.fluid.axisymmetric.AxisymmetricFluid`; the value a Python literal) for this
+run only.  Prints the validation's figures of the run
+(:func:`sphfem.validation.droplet_impact.figures`; with ``--fluid-only`` the summary's fluid
+figures).
 """
 
 from __future__ import annotations
@@ -22,6 +28,14 @@ from __future__ import annotations
 import argparse
 import json
 from pathlib import Path
+
+#: AxisymmetricFluid keywords that AxisymmetricFluidModule sets itself (from scene keys such
+#: as ``fluid.shifting`` or from its class constants): not --fluid-option's to override
+SET_BY_MODULE = ("kernel", "periodic_z", "planar", "wall_z", "wall_normals", "smooth_hoop",
+                 "no_penetration", "surface_tension", "shifting", "shift_surface",
+                 "shift_speed", "skin", "shift_surface_lambda", "shift_drift",
+                 "wall_friction", "film_tension", "axis_floor", "stress_plane",
+                 "csf_meridian")
 
 
 def main(argv=None) -> None:
@@ -34,8 +48,31 @@ def main(argv=None) -> None:
     ap.add_argument("--resume", action="store_true")
     ap.add_argument("--fluid-only", action="store_true")
     ap.add_argument("--every", type=float, default=None, help="output interval [t_c]")
+    ap.add_argument("--fluid-option", action="append", default=[], metavar="KEY=VALUE",
+                    help="an AxisymmetricFluidModule.fluid_options keyword for this run")
     ap.add_argument("overrides", nargs="*", help="section.key=value")
     a = ap.parse_intermixed_args(argv)
+
+    import ast
+    import inspect
+
+    from sphfem.axisymmetric_scene import AxisymmetricFluidModule
+    from sphfem.fluid.axisymmetric import AxisymmetricFluid
+
+    options = dict(AxisymmetricFluidModule.fluid_options)
+    # the keywords the module sets from scene keys or its class constants are not options
+    keywords = [p.name for p in inspect.signature(AxisymmetricFluid).parameters.values()
+                if p.default is not p.empty and p.name not in SET_BY_MODULE]
+    for kv in a.fluid_option:
+        key, sep, value = kv.partition("=")
+        if not sep or key not in keywords:
+            ap.error(f"--fluid-option {kv!r}: expected KEY=VALUE with KEY one of "
+                     f"{sorted(keywords)}")
+        try:
+            options[key] = ast.literal_eval(value)
+        except (ValueError, SyntaxError):
+            ap.error(f"--fluid-option {kv!r}: the value is not a Python literal")
+    AxisymmetricFluidModule.fluid_options = options
 
     from sphfem.api import run
     from sphfem.scene import parse_scene
