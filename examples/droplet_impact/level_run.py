@@ -72,8 +72,6 @@ def main(argv=None) -> None:
             options[key] = ast.literal_eval(value)
         except (ValueError, SyntaxError):
             ap.error(f"--fluid-option {kv!r}: the value is not a Python literal")
-    AxisymmetricFluidModule.fluid_options = options
-
     from sphfem.api import run
     from sphfem.scene import parse_scene
     from sphfem.validation import droplet_impact as di
@@ -90,7 +88,12 @@ def main(argv=None) -> None:
         d["output"]["every"] = f"{a.every} tc"
     scene = parse_scene(d, source=f"level_run V={a.speed:g} D/dx={a.per_diameter}")
     resume = a.resume and (a.out / "checkpoint.npz").exists()
-    run(scene, a.out, resume=resume, overwrite=not resume, keep_checkpoint=True)
+    default = AxisymmetricFluidModule.fluid_options
+    AxisymmetricFluidModule.fluid_options = options  # for this run only
+    try:
+        run(scene, a.out, resume=resume, overwrite=not resume, keep_checkpoint=True)
+    finally:
+        AxisymmetricFluidModule.fluid_options = default
     summary = json.loads((a.out / "summary.json").read_text())
     drop = next(b for b in d["blocks"] if b["kind"] == "fluid")
     if a.fluid_only:

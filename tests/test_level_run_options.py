@@ -1,0 +1,52 @@
+"""examples/droplet_impact/level_run.py --fluid-option: bad keys and values stop with the
+key named, and an override holds for the run only."""
+
+import importlib.util
+from pathlib import Path
+
+import pytest
+
+from sphfem.axisymmetric_scene import AxisymmetricFluidModule
+
+SCRIPT = Path(__file__).parents[1] / "examples" / "droplet_impact" / "level_run.py"
+
+
+def _level_run():
+    spec = importlib.util.spec_from_file_location("level_run", SCRIPT)
+    mod = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(mod)
+    return mod
+
+
+@pytest.mark.parametrize("option, message", [
+    ("bogus=1", "expected KEY=VALUE with KEY one of"),
+    ("wall_tension", "expected KEY=VALUE with KEY one of"),
+    ("shifting=0.5", "expected KEY=VALUE with KEY one of"),  # a scene key, not an option
+    ("wall_tension=Tru", "the value is not a Python literal"),
+])
+def test_bad_fluid_option_is_named(tmp_path, capsys, option, message):
+    with pytest.raises(SystemExit):
+        _level_run().main(["10", "16", "0.05", str(tmp_path / "run"), "--fluid-only",
+                           "--fluid-option", option])
+    err = capsys.readouterr().err
+    assert message in err and repr(option) in err
+    assert not (tmp_path / "run").exists()
+
+
+def test_fluid_option_holds_for_the_run_only(tmp_path, monkeypatch):
+    seen = {}
+    import sphfem.api
+
+    def fake_run(scene, out, **kw):  # records the options the module would build with
+        seen.update(AxisymmetricFluidModule.fluid_options)
+        raise RuntimeError("stop here")
+
+    monkeypatch.setattr(sphfem.api, "run", fake_run)
+    before = dict(AxisymmetricFluidModule.fluid_options)
+    with pytest.raises(RuntimeError, match="stop here"):
+        _level_run().main(["10", "16", "0.05", str(tmp_path / "run"), "--fluid-only",
+                           "--fluid-option", "wall_tension=False",
+                           "--fluid-option", "axis_alpha=0.1"])
+    assert seen["wall_tension"] is False and seen["axis_alpha"] == 0.1
+    assert seen["csf_axis_curvature"] == before["csf_axis_curvature"]
+    assert AxisymmetricFluidModule.fluid_options == before
