@@ -1,10 +1,10 @@
 """examples/droplet_impact/level_run.py --fluid-option: bad keys and values stop with the
 key named, and an override holds for the run only."""
 
-import importlib.util
 from pathlib import Path
 
 import pytest
+from builders import load_example
 
 from sphfem.axisymmetric_scene import AxisymmetricFluidModule
 
@@ -12,10 +12,7 @@ SCRIPT = Path(__file__).parents[1] / "examples" / "droplet_impact" / "level_run.
 
 
 def _level_run():
-    spec = importlib.util.spec_from_file_location("level_run", SCRIPT)
-    mod = importlib.util.module_from_spec(spec)
-    spec.loader.exec_module(mod)
-    return mod
+    return load_example(SCRIPT, "level_run")
 
 
 @pytest.mark.parametrize("option, message", [
