@@ -72,6 +72,7 @@ def main(argv=None) -> None:
             options[key] = ast.literal_eval(value)
         except (ValueError, SyntaxError):
             ap.error(f"--fluid-option {kv!r}: the value is not a Python literal")
+
     from sphfem.api import run
     from sphfem.scene import parse_scene
     from sphfem.validation import droplet_impact as di
