@@ -85,18 +85,26 @@ def is_axisymmetric(scene) -> bool:
 
 
 def build_ring_particles(scene) -> ParticleSet:
-    """The blocks of an axisymmetric ``scene`` as rings (module docstring): the lattice of
-    each block (:func:`sphfem.geometry.build_particles`), its points with r > 0, with
-    ``vol`` = 2 pi r dx_b^2 and ``m`` = rho0 ``vol`` (dx_b: the block's spacing)."""
-    from sphfem.geometry import block_points, build_particles
+    """The blocks of an axisymmetric ``scene`` as rings (module docstring): the points of
+    each block (:func:`sphfem.geometry.build_particles`) with r > 0, with ``vol`` = 2 pi r A
+    and ``m`` = rho0 ``vol``; the meridian area A is dx_b^2 for a lattice (dx_b: the
+    block's spacing) and the point's share of its circle's annulus for ``sampling =
+    "shells"`` (:func:`sphfem.geometry.shell_areas`; the areas sum to the half-disc's)."""
+    from sphfem.geometry import Shape, block_points, build_particles, shell_areas
 
     ps = build_particles(scene)
-    counts = [block_points(scene, i).shape[0] for i in range(len(scene.blocks))]
-    dx = np.repeat([b.dx if b.dx is not None else scene.sph.dx for b in scene.blocks],
-                   counts)
+    areas = []
+    for i, b in enumerate(scene.blocks):
+        xb = block_points(scene, i)
+        dxb = b.dx if b.dx is not None else scene.sph.dx
+        if b.sampling == "shells":
+            areas.append(shell_areas(xb, Shape.from_block(b, 2), dxb))
+        else:
+            areas.append(np.full(xb.shape[0], dxb * dxb))
+    area = np.concatenate(areas)
     keep = ps.x[:, 0] > 0.0
     out = ps.select(keep)
-    ring = TWO_PI * out.x[:, 0] * dx[keep] ** 2
+    ring = TWO_PI * out.x[:, 0] * area[keep]
     out.vol[:] = ring
     out.m[:] = out.rho * ring
     return out

@@ -25,6 +25,13 @@ Placement:
   is within a few per cent of ``volume / dx^dim``; a few repulsion sweeps then even out
   the spacing.  Deterministic for a given seed.  (~0.25 ms per point: ~1 s for the
   4,000 points of the 3D droplet's bounding box, which took ~15-50 s with scipy's sampler.)
+* :func:`shell_points` -- a sphere (disc in 2D) as concentric layers, so that its surface
+  is smooth rather than a lattice staircase (a staircase reads to a surface-tension model
+  as curvature of order 1 / dx at every step; docs/validation/droplet_impact, session 27).
+  2D: circles mirror-symmetric about the vertical axis with no point on it (their half
+  x > 0 is the meridian section :func:`~sphfem.fluid.axisymmetric_surface_tension.
+  half_disc_arcs` of an axisymmetric ball, areas from :func:`shell_areas`); 3D: the
+  Fibonacci shells of :func:`~sphfem.fluid.setup.droplet_packing`.
 
 :func:`build_particles` fills every block of a scene: mass ``rho0 * V / n`` (so a block
 carries its exact mass), ``rho = rho0``, ``vol = m / rho``, ``kind``, ``material`` (the
@@ -446,12 +453,55 @@ def block_points(scene, i: int) -> np.ndarray:
     shape = Shape.from_block(b, scene.dim)
     if b.sampling == "poisson":
         x = poisson_points(shape, dx, scene.dim, seed=[scene.seed, i])
+    elif b.sampling == "shells":
+        x = shell_points(shape, dx, scene.dim)
     else:
         x = lattice_points(shape, dx, scene.dim)
     if b.jitter:
         rng = np.random.default_rng([scene.seed, i, 1])
         x = x + rng.uniform(-b.jitter * dx, b.jitter * dx, size=x.shape)
     return x
+
+
+def shell_points(shape: Shape, dx: float, dim: int | None = None) -> np.ndarray:
+    """A sphere (2D: disc) ``shape`` filled with concentric layers of spacing dx' = radius /
+    round(radius / dx), layer k at rho_k = (k + 1/2) dx' (the outer layer dx'/2 inside the
+    surface).  2D: circle k holds 2 m_k points, m_k = round(pi rho_k / dx'), at the angles
+    (j + 1/2) pi / m_k from the vertical (+y) axis, so the set is mirror-symmetric about the
+    vertical axis through the centre and no point lies on it; 3D:
+    :func:`sphfem.fluid.setup.droplet_packing` (round(4 pi rho_k^2 / dx'^2) points per shell
+    on a Fibonacci spiral)."""
+    _check(shape, dx, dim)
+    if shape.kind != "sphere" or shape.dim not in (2, 3):
+        raise ValueError(f"shell_points: a sphere in 2D or 3D, got a {shape.kind} in "
+                         f"{shape.dim}D")
+    c = np.array(shape.center)
+    if shape.dim == 3:
+        from sphfem.fluid.setup import droplet_packing
+
+        return np.ascontiguousarray(c + droplet_packing(3, shape.radius, dx))
+    nr = max(1, int(round(shape.radius / dx)))
+    h = shape.radius / nr
+    pts = []
+    for k in range(nr):
+        rk = (k + 0.5) * h
+        m = max(1, int(round(math.pi * rk / h)))
+        th = (np.arange(2 * m) + 0.5) * math.pi / m
+        pts.append(np.column_stack([rk * np.sin(th), rk * np.cos(th)]))
+    return np.ascontiguousarray(c + np.concatenate(pts))
+
+
+def shell_areas(x: np.ndarray, shape: Shape, dx: float) -> np.ndarray:
+    """Meridian areas [m^2] of 2D :func:`shell_points` ``x`` of ``shape``: pi rho_k dx' /
+    m_k for a point of circle k (its circle's annulus shared evenly by its 2 m_k points;
+    they sum to the disc's area pi radius^2)."""
+    nr = max(1, int(round(shape.radius / dx)))
+    h = shape.radius / nr
+    d = np.asarray(x, float) - np.array(shape.center)
+    k = np.clip(np.rint(np.hypot(d[:, 0], d[:, 1]) / h - 0.5), 0, nr - 1)
+    rk = (k + 0.5) * h
+    m = np.maximum(1.0, np.rint(math.pi * rk / h))
+    return math.pi * rk * h / m
 
 
 def build_particles(scene) -> ParticleSet:

@@ -87,6 +87,9 @@ def _check_block(rec, ctx, path):
             if not hi > lo:
                 ctx.error(f"{path}.hi", f"must exceed {path}.lo on every axis; axis "
                                         f"{AXES[a]}: hi = {hi:g} <= lo = {lo:g}")
+    if rec.sampling == "shells" and (rec.shape != "sphere" or ctx.dim == 1):
+        ctx.error(f"{path}.sampling", f'"shells" fills a sphere (disc) in 2D or 3D, got a '
+                                      f"{rec.shape} in {ctx.dim}D")
     if rec.shape == "cylinder" and AXES.index(rec.axis) >= ctx.dim:
         ctx.error(f"{path}.axis", f"axis {rec.axis!r} does not exist in {ctx.dim}D; expected "
                                   + " or ".join(repr(a) for a in AXES[: ctx.dim]))
@@ -157,8 +160,9 @@ BLOCKS = Section("blocks", (
     Param("shape", str, REQUIRED, choices=SHAPES, doc="geometry of the block"),
     Param("kind", str, REQUIRED, choices=BLOCK_KINDS, doc="particle kind"),
     Param("material", str, REQUIRED, doc="name of a `[materials.<name>]` table"),
-    Param("sampling", str, "lattice", choices=("lattice", "poisson"),
-          doc="particle placement: Cartesian lattice or Poisson-disk blue noise"),
+    Param("sampling", str, "lattice", choices=("lattice", "poisson", "shells"),
+          doc="particle placement: Cartesian lattice, Poisson-disk blue noise, or (a "
+              "sphere in 2D or 3D) concentric shells with a smooth surface"),
     Param("lo", VECTOR, REQUIRED, unit="m", when=("shape", ("box",)), doc="lower corner"),
     Param("hi", VECTOR, REQUIRED, unit="m", when=("shape", ("box",)), doc="upper corner"),
     Param("center", VECTOR, REQUIRED, unit="m", when=("shape", _ROUND),
@@ -407,7 +411,8 @@ def parse_scene(data, source: str = "<string>") -> Scene:
 
 def _check_axisymmetric(rec, ctx) -> None:
     """An axisymmetric scene: the domain starts at the axis (lo[0] = 0, r not periodic) and
-    every block is a lattice (a Poisson sample puts rings arbitrarily close to the axis)."""
+    every block is a lattice or shells (a Poisson sample puts rings arbitrarily close to the
+    axis)."""
     dom = rec["domain"]
     if dom.lo[0] != 0.0:
         ctx.error("domain.lo", f'geometry = "axisymmetric": the domain starts at the axis, '
@@ -415,9 +420,10 @@ def _check_axisymmetric(rec, ctx) -> None:
     if dom.periodic[0]:
         ctx.error("domain.periodic", 'geometry = "axisymmetric": r cannot be periodic')
     for i, b in enumerate(rec["blocks"]):
-        if b.sampling != "lattice":
-            ctx.error(f"blocks[{i}].sampling", 'geometry = "axisymmetric" takes lattice '
-                                               f"blocks (rings off the axis), got {b.sampling!r}")
+        if b.sampling == "poisson":
+            ctx.error(f"blocks[{i}].sampling", 'geometry = "axisymmetric" takes "lattice" or '
+                                               '"shells" blocks (rings off the axis), got '
+                                               f"{b.sampling!r}")
 
 
 def _default_name(source: str) -> str:

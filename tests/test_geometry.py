@@ -207,3 +207,54 @@ def test_property_box_lattice(dim, data):
     xb = lattice_points(shape, dx, include_boundary=True)
     assert xb.shape[0] == int(np.prod([n + 1 for n in n_axis]))
     assert np.allclose(xb.min(axis=0), lo) and np.allclose(xb.max(axis=0), lo + ext)
+
+
+@pytest.mark.parametrize("n", [3, 10, 33])
+def test_shell_points_disc(n):
+    """2D shells: mirror-symmetric about the vertical axis, no point on it, nearest
+    neighbour spacing 0.7-1.2 dx' across the disc (the centre circle's 4 points are dx' /
+    sqrt(2) apart), the outer circle dx'/2 inside, areas
+    summing to pi R^2 and each within 25 % of dx'^2 (rounding of pi rho_k / dx')."""
+    from sphfem.geometry import shell_areas, shell_points
+
+    c = np.array([0.3, -0.2])
+    s = Shape.sphere(c, 1.0)
+    dx = 1.0 / n
+    x = shell_points(s, dx, 2)
+    d = x - c
+    assert np.all(np.abs(d[:, 0]) > 0.3 * dx)  # no point on the axis (min 0.35 dx')
+    mirror = d * [-1.0, 1.0]
+    assert cKDTree(d).query(mirror)[0].max() < 1e-12
+    np.testing.assert_allclose(np.hypot(*d.T).max(), 1.0 - dx / 2, rtol=1e-12)
+    if n > 3:
+        nn = cKDTree(x).query(x, k=2)[0][:, 1] / dx
+        assert 0.7 < nn.min() and nn.max() < 1.2
+    a = shell_areas(x, s, dx)
+    assert a.sum() == pytest.approx(math.pi, rel=1e-12)
+    assert np.all(np.abs(a / dx**2 - 1) < 0.25)
+
+
+def test_shell_points_ball_and_scene_key():
+    """3D shells are droplet_packing's Fibonacci shells (count within 1.5 % of V / dx^3 at
+    R/dx 10); ``sampling = "shells"`` fills a sphere block; on a box it is an error naming
+    the key."""
+    from sphfem.geometry import shell_points
+
+    s = Shape.sphere((0.0, 0.0, 0.0), 1.0)
+    x = shell_points(s, 0.1, 3)
+    assert x.shape[0] == pytest.approx(4 / 3 * math.pi / 1e-3, rel=0.015)
+    assert np.hypot.reduce(x, axis=1).max() == pytest.approx(0.95, rel=1e-12)
+    with pytest.raises(ValueError, match="sphere"):
+        shell_points(Shape.box((0, 0), (1, 1)), 0.1, 2)
+    data = {"scene": {"dim": 2}, "domain": {"lo": [-2, -2], "hi": [2, 2]},
+            "time": {"t_end": 1.0}, "physics": {"modules": ["fluid"]},
+            "sph": {"dx": 0.1}, "materials": {"w": {"rho0": 1000.0, "c0": 10.0, "mu": 1e-3}},
+            "blocks": [{"shape": "sphere", "kind": "fluid", "material": "w",
+                        "center": [0.0, 0.0], "radius": 1.0, "sampling": "shells"}]}
+    ps = build_particles(parse_scene(data))
+    assert ps.n == shell_points(Shape.sphere((0.0, 0.0), 1.0), 0.1, 2).shape[0]
+    blk = data["blocks"][0]
+    del blk["center"], blk["radius"]
+    blk.update(shape="box", lo=[-1, -1], hi=[1, 1])
+    with pytest.raises(SceneError, match=r"blocks\[0\]\.sampling"):
+        parse_scene(data)

@@ -47,3 +47,16 @@ def test_fluid_option_holds_for_the_run_only(tmp_path, monkeypatch):
     assert seen["wall_tension"] is False and seen["axis_alpha"] == 0.1
     assert seen["csf_axis_curvature"] == before["csf_axis_curvature"]
     assert AxisymmetricFluidModule.fluid_options == before
+
+
+def test_scene_overrides_index_lists():
+    """``section.key=value`` overrides reach a block by its position (``blocks.1.
+    sampling=shells``); a name where a list needs a number is an error naming it."""
+    from sphfem.validation.droplet_impact import apply_overrides, scene_at
+
+    d = scene_at(10.0, 16, 0.1, overrides=["blocks.1.sampling=shells",
+                                          "materials.water.c0=200.0"])
+    assert d["blocks"][1]["sampling"] == "shells" and d["blocks"][1]["kind"] == "fluid"
+    assert d["materials"]["water"]["c0"] == 200.0
+    with pytest.raises(ValueError, match="'droplet' indexes a list"):
+        apply_overrides(d, ["blocks.droplet.sampling=shells"])

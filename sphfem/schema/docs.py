@@ -129,7 +129,12 @@ Conventions:
   `[0, 1]` with `dx = 0.1` gets 10 particles per axis at 0.05 ... 0.95; the spacing of a
   box is adjusted per axis to `length / round(length / dx)` so the box is tiled exactly);
   `"poisson"` is blue noise (Poisson-disk) with the same mean number density, for
-  free-surface bodies, reproducible for a given `[scene] seed`.
+  free-surface bodies, reproducible for a given `[scene] seed`; `"shells"` (a sphere in
+  2D or 3D) fills it with concentric layers of spacing `radius / round(radius / dx)` so
+  that its surface is smooth, not a lattice staircase (a surface-tension model reads every
+  step of a staircase as a curvature of order 1 / dx): circles mirror-symmetric about the
+  vertical axis in 2D (in an axisymmetric scene each ring takes its share of its circle's
+  annulus as meridian area), Fibonacci shells in 3D.
 - Every particle of a block has mass `rho0 * (exact block volume) / (particle count)`, so
   the block carries its exact mass; particles of two blocks closer than `dx / 2` are an
   error (overlapping blocks).

@@ -179,7 +179,8 @@ def scene_at(speed: float, per_diameter: int, t_end_tc: float, *,
 
 def apply_overrides(d: dict, overrides) -> dict:
     """Set ``"section.key=value"`` strings (the value a Python literal, else the text) in
-    the scene dict ``d``, in order; returns ``d``."""
+    the scene dict ``d``, in order; a number in the path indexes a list (``"blocks.1.
+    sampling=shells"``); returns ``d``."""
     for kv in overrides:
         key, _, text = kv.partition("=")
         try:
@@ -188,9 +189,15 @@ def apply_overrides(d: dict, overrides) -> dict:
             value = text
         node = d
         *path, last = key.split(".")
-        for k in path:
-            node = node.setdefault(k, {})
-        node[last] = value
+        for depth, k in enumerate([*path, last]):
+            if isinstance(node, list) and not k.isdigit():
+                raise ValueError(f"override {kv!r}: {k!r} indexes a list (expected a number)")
+            if depth < len(path):
+                node = node[int(k)] if isinstance(node, list) else node.setdefault(k, {})
+        if isinstance(node, list):
+            node[int(last)] = value
+        else:
+            node[last] = value
     return d
 
 
