@@ -263,6 +263,14 @@ class AxisymmetricFluidModule(PhysicsModule):
     fluid_options = {"adaptive_h": False, "wall_tension": True,
                      "free_surface_no_tension": True, "fragment_hoop": False,
                      "csf_axis_curvature": True, "csf_curvature_smoothing": 2.0}
+    #: the AxisymmetricFluid keywords this module sets itself, from scene keys (e.g.
+    #: ``fluid.shifting``) and its class constants; the solver's other keywords come from
+    #: ``fluid_options`` (tests/test_level_run_options.py holds the two sets to the call)
+    SCENE_KEYWORDS = frozenset({
+        "kernel", "wall_normals", "smooth_hoop", "no_penetration", "surface_tension",
+        "shifting", "shift_surface", "shift_speed", "skin", "shift_surface_lambda",
+        "shift_drift", "wall_friction", "film_tension", "axis_floor", "stress_plane",
+        "csf_meridian"})
     #: rings are kept at r >= AXIS_FLOOR_DX dx (the fluid's spacing; the lattice's first
     #: column sits at dx / 2): next to the axis a ring's meridian area grows as 1 / r and its
     #: mirror hardly repels it; without the floor the apex ring of the 10 m/s droplet at

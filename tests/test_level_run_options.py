@@ -60,3 +60,32 @@ def test_scene_overrides_index_lists():
     assert d["materials"]["water"]["c0"] == 200.0
     with pytest.raises(ValueError, match="'droplet' indexes a list"):
         apply_overrides(d, ["blocks.droplet.sampling=shells"])
+
+
+def test_module_keywords_are_its_call(monkeypatch):
+    """AxisymmetricFluidModule passes the solver exactly its SCENE_KEYWORDS plus
+    ``fluid_options`` (and csf_meridian, a scene key it merges into them), so level_run's
+    list of settable options cannot drift from the module's call."""
+    import sphfem.fluid.axisymmetric as fa
+    from sphfem.scene import parse_scene
+    from sphfem.simulation import Simulation
+    from sphfem.validation.droplet_impact import scene_at
+
+    seen = {}
+
+    class Recorder:
+        def __init__(self, *args, **kw):
+            seen.update(kw)
+            raise RuntimeError("recorded")
+
+    monkeypatch.setattr(fa, "AxisymmetricFluid", Recorder)
+    d = scene_at(10.0, 16, 0.05)
+    d["physics"]["modules"] = ["fluid"]
+    for key in ("heat", "coupling"):
+        d.pop(key, None)
+    with pytest.raises(RuntimeError, match="recorded"):
+        Simulation(parse_scene(d)).run(None, progress=False)
+    options = set(AxisymmetricFluidModule.fluid_options) | {"csf_meridian"}
+    assert set(seen) - options == AxisymmetricFluidModule.SCENE_KEYWORDS - {"csf_meridian"}
+    assert not (set(AxisymmetricFluidModule.fluid_options)
+                & AxisymmetricFluidModule.SCENE_KEYWORDS)

@@ -29,13 +29,10 @@ import argparse
 import json
 from pathlib import Path
 
-#: AxisymmetricFluid keywords that AxisymmetricFluidModule sets itself (from scene keys such
-#: as ``fluid.shifting`` or from its class constants): not --fluid-option's to override
-SET_BY_MODULE = ("kernel", "periodic_z", "planar", "wall_z", "wall_normals", "smooth_hoop",
-                 "no_penetration", "surface_tension", "shifting", "shift_surface",
-                 "shift_speed", "skin", "shift_surface_lambda", "shift_drift",
-                 "wall_friction", "film_tension", "axis_floor", "stress_plane",
-                 "csf_meridian")
+#: AxisymmetricFluid keywords of other geometries (a periodic or planar strip, a wall plane):
+#: not --fluid-option's to set, nor are those the module sets itself
+#: (``AxisymmetricFluidModule.SCENE_KEYWORDS``: scene keys and class constants)
+OTHER_GEOMETRIES = ("periodic_z", "planar", "wall_z")
 
 
 def main(argv=None) -> None:
@@ -61,8 +58,9 @@ def main(argv=None) -> None:
 
     options = dict(AxisymmetricFluidModule.fluid_options)
     # the keywords the module sets from scene keys or its class constants are not options
+    fixed = AxisymmetricFluidModule.SCENE_KEYWORDS | set(OTHER_GEOMETRIES)
     keywords = [p.name for p in inspect.signature(AxisymmetricFluid).parameters.values()
-                if p.default is not p.empty and p.name not in SET_BY_MODULE]
+                if p.default is not p.empty and p.name not in fixed]
     for kv in a.fluid_option:
         key, sep, value = kv.partition("=")
         if not sep or key not in keywords:
