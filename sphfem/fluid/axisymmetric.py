@@ -736,6 +736,16 @@ class AxisymmetricFluid:
     acoustic mode of the first columns grew from 2.2 t_c (density +-1 %, pressure +-1e5 Pa
     by 2.5 t_c) and blew a hole at the centre; alpha = 0.05 everywhere removed it.
 
+    ``bulk_damping`` (alpha_b > 0): an acoustic damper, the bulk viscous stress
+    Pi_i = -rho_i nu_b,i (div v)_i = nu_b,i (D rho / D t)_i added to the pressure of the
+    fluid rows in the momentum equation, nu_b,i = alpha_b h_i c0 (h_i = R_i / 2), the
+    density rate of the previous evaluation (a bulk viscosity zeta = rho nu_b: it acts on
+    the compressible part of the flow alone, so it damps the artificial acoustic waves of a
+    weakly compressible fluid, mode k at the rate nu_b k^2 / 2 beyond the delta term's,
+    and leaves a divergence-free flow as it is; cf. Sun et al. 2023, J. Comput. Phys. 483,
+    112056, who add such a term to delta-SPH).  Time step: nu_b enters the viscous limit.
+    The walls' pressure and the output ``p`` stay the equation of state's.
+
     ``skin`` (> 0): a Verlet list (Verlet 1967): the neighbour list and the axis mirrors
     reach R (1 + skin) and are reused until R + 2 max_i |x_i - x_i,build| exceeds that
     radius.  Every pair kernel skips pairs beyond its support and list rows are sorted by
@@ -756,7 +766,8 @@ class AxisymmetricFluid:
                  csf_axis_curvature: bool = False, csf_curvature_smoothing: float = 1.0,
                  axis_alpha: float = 0.0, csf_meridian: str = "csf",
                  shift_surface_lambda: float = 0.75, shift_drift: str = "kept",
-                 axis_floor: float = 0.0, stress_plane: float | None = None):
+                 axis_floor: float = 0.0, stress_plane: float | None = None,
+                 bulk_damping: float = 0.0):
         self.x = np.array(x, dtype=np.float64)
         n = self.n = self.x.shape[0]
         self.v = np.array(v, dtype=np.float64).reshape(n, 2)
@@ -814,6 +825,9 @@ class AxisymmetricFluid:
             raise ValueError(f"shifting must be >= 0 (the coefficient A), got {shifting!r}")
         #: False: the walls' extrapolated pressure is clipped at 0 (no suction)
         self.wall_tension = bool(wall_tension)
+        if not (bulk_damping >= 0.0 and math.isfinite(bulk_damping)):
+            raise ValueError(f"bulk_damping must be a finite number >= 0, got {bulk_damping!r}")
+        self.bulk_damping = float(bulk_damping)
         #: True: rings at or next to the free surface (lambda < 0.75) keep rho >= rho0
         self.free_surface_no_tension = bool(free_surface_no_tension)
         #: particle shifting coefficient A of dr = -A h |v| dt grad C (0: off)
@@ -1046,6 +1060,9 @@ class AxisymmetricFluid:
         qh = qs if self.smooth_hoop else v[:, 0] / np.where(x[:, 0] != 0.0, x[:, 0], 1.0)
         if self.planar:  # the plain planar divergence of FluidSolver
             Bm[:, :3] = (1.0, 0.0, 1.0)
+        p_eos = p[:n].copy()
+        if self.bulk_damping > 0.0:  # the acoustic damper's bulk stress (class docstring)
+            p[:n][fl] += (self.bulk_damping * 0.5 * self.Rp[fl] * pa.c0) * self.drho[fl]
         _fill_mirrors(n, src, mtype, zw, self.gravity[1], x, v, vg, rho, p, A, mt, mu, gr, dvdr,
                       Rp)
         vd = self._divergence_velocity(v, vg, src, mtype)
@@ -1074,7 +1091,7 @@ class AxisymmetricFluid:
                                 lam=Bm[:n, 4])
         self.acc[:] = acc[:n]
         self.drho[:] = drho[:n]
-        self.p[:] = p[:n]
+        self.p[:] = p_eos
         self.area = A[:n].copy()
         #: the augmented state of this evaluation (real rows, then mirrors), for callers that
         #: need pair sums of it (the wall forces of sphfem.axisymmetric_scene)
@@ -1160,6 +1177,9 @@ class AxisymmetricFluid:
         lim = {"acoustic": pa.cfl * h / (pa.c0 + vmax)}
         if pa.mu > 0:
             lim["viscous"] = pa.visc_cfl * h**2 * rhomin / pa.mu
+        if self.bulk_damping > 0.0:  # nu_b = alpha_b h c0 (h of the largest support)
+            hb = 0.5 * float(self.Rp[self._fidx].max()) if self._fidx.size else h
+            lim["bulk"] = pa.visc_cfl * h**2 / (self.bulk_damping * hb * pa.c0)
         if amax > 0:
             lim["force"] = pa.force_cfl * math.sqrt(h / amax)
         return lim

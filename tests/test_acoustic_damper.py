@@ -1,0 +1,87 @@
+"""The acoustic damper of the axisymmetric fluid (``bulk_damping``, a bulk viscosity
+nu_b = alpha_b h c0): a standing acoustic wave loses amplitude at the extra rate
+nu_b k^2 / 2, and a divergence-free flow is left as it is."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from sphfem.fluid.axisymmetric import AxisymmetricFluid
+from sphfem.fluid.wcsph import FluidParams
+from sphfem.particles import FLUID, WALL
+
+DX, C0, NZ, NX = 1e-3, 10.0, 32, 6
+
+
+def _column(v_of_x, alpha_b, mu=0.0, delta=0.1):
+    """planar=True strip 0 < x < NX dx (symmetry plane at x = 0, free-slip walls beyond),
+    z periodic over NZ dx, rho0 = 1000, velocity field v_of_x(x) at t = 0."""
+    xs = (np.arange(NX + 3) + 0.5) * DX
+    zs = (np.arange(NZ) + 0.5) * DX
+    x = np.column_stack([q.ravel() for q in np.meshgrid(xs, zs, indexing="ij")])
+    kind = np.where(x[:, 0] < NX * DX, FLUID, WALL).astype(np.int8)
+    pa = FluidParams(rho0=1000.0, c0=C0, mu=mu, delta=delta, alpha=0.0)
+    v = np.where((kind == FLUID)[:, None], v_of_x(x), 0.0)
+    nrm = np.where((kind == WALL)[:, None], [-1.0, 0.0], 0.0)
+    return AxisymmetricFluid(x, v, np.full(len(x), 1000.0), kind, 1000.0 * DX * DX,
+                             DX * DX, 3 * DX, pa, planar=True, periodic_z=(0.0, NZ * DX),
+                             wall_friction="none", wall_normals=nrm, bulk_damping=alpha_b)
+
+
+def _energy_decay_rate(alpha_b):
+    """Decay rate [1/s] of the acoustic energy (kinetic + elastic) of the standing wave
+    v_z = U sin(k z), fitted over three periods."""
+    k = 2 * math.pi / (NZ * DX)
+    f = _column(lambda x: np.column_stack([0 * x[:, 0], 0.01 * C0 * np.sin(k * x[:, 1])]),
+                alpha_b)
+    fl = f.fluid
+    period = 2 * math.pi / (C0 * k)
+    dt = period / 100
+    ts, es = [], []
+    for step in range(301):
+        if step % 10 == 0:
+            m = 1000.0 * DX * DX
+            ke = 0.5 * m * np.sum(f.v[fl] ** 2)
+            pe = 0.5 * m * C0**2 * np.sum((f.rho[fl] / 1000.0 - 1.0) ** 2)
+            ts.append(f.t)
+            es.append(ke + pe)
+        f.step(dt)
+    slope = np.polyfit(ts, np.log(es), 1)[0]
+    return -slope, k
+
+
+def test_damper_adds_nu_b_k2_to_the_acoustic_decay():
+    """Energy decays at 2 x the amplitude rate: the extra amplitude rate of alpha_b = 0.5
+    is nu_b k^2 / 2 (nu_b = 0.5 h c0, h = 1.5 dx) within 15 % (measured 0.89 x: the pair
+    gradient of the particle divergence, two first derivatives, at k h = 0.29).  Without it
+    the delta term alone (its renormalised correction leaves smooth fields alone) damps the
+    wave 500 x more slowly (measured 0.54 / s against 257 / s)."""
+    g0, k = _energy_decay_rate(0.0)
+    g1, _ = _energy_decay_rate(0.5)
+    expected = 0.5 * 1.5 * DX * C0 * k * k / 2
+    assert (g1 - g0) / 2 == pytest.approx(expected, rel=0.15)
+    assert g0 < 0.01 * g1
+
+
+def test_damper_leaves_a_divergence_free_flow():
+    """A shear wave v_z = U cos(pi x / (2 L)) (divergence-free; it decays by viscosity):
+    with alpha_b = 0.5 its velocity after 200 steps differs from the undamped run's by
+    < 1e-3 of U (measured 7.9e-5)."""
+    L = NX * DX
+    U = 0.01 * C0
+
+    def shear(x):
+        return np.column_stack([0 * x[:, 0], U * np.cos(math.pi * x[:, 0] / (2 * L))])
+
+    runs = []
+    for ab in (0.0, 0.5):
+        f = _column(shear, ab, mu=1e-1)
+        dt = 0.5 * f.stable_dt()
+        for _ in range(200):
+            f.step(dt)
+        runs.append(f.v[f.fluid].copy())
+    diff = np.abs(runs[1] - runs[0]).max() / U
+    assert diff < 1e-3
