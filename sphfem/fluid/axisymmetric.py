@@ -175,6 +175,26 @@ def wall_state(x, v, rho, p, A, kind, offsets, indices, Rp, kcode, Lz, gravity, 
             vg[i, 1] = v[i, 1]
 
 
+@njit(cache=True)
+def _clip_surface_walls(x, p, rho, kind, offsets, indices, Rp, Lz, surface, rho0, B, gamma):
+    """``wall_tension = "bulk"``: a WALL row with a free-surface fluid ring (``surface``)
+    within the pair support has its pressure clipped at 0 (and its density with it)."""
+    for i in range(x.shape[0]):
+        if kind[i] != WALL or p[i] >= 0.0:
+            continue
+        for jj in range(offsets[i], offsets[i + 1]):
+            j = indices[jj]
+            if not surface[j]:
+                continue
+            r0 = x[i, 0] - x[j, 0]
+            r1 = min_image(x[i, 1] - x[j, 1], Lz)
+            R = 0.5 * (Rp[i] + Rp[j])
+            if r0 * r0 + r1 * r1 < R * R:
+                p[i] = 0.0
+                rho[i] = rho0
+                break
+
+
 @njit(cache=True, parallel=True)
 def mean_area(x, A, kind, offsets, indices, Rp, kcode, Lz, out):
     """Number-weighted mean meridian area of the fluid around each real FLUID row,
@@ -696,7 +716,11 @@ class AxisymmetricFluid:
     support of its neighbours (its own area shrinks ~ r0 / r).
     ``shifting`` (A > 0): particle shifting after each step (:meth:`_shift`).
     ``wall_tension=False``: the walls' extrapolated pressure is clipped at 0 (the wall
-    pushes, never pulls: the lamella tip's tension is not copied onto the wall).
+    pushes, never pulls: the lamella tip's tension is not copied onto the wall);
+    ``"bulk"`` (experimental): clipped only on the wall rows with a free-surface ring
+    (lambda_min < ``shift_surface_lambda``, previous evaluation) within their support, so
+    the tension stays under bulk fluid (the axis-wall corner) and goes at a contact line,
+    where it is the kernel's truncation.
     ``free_surface_no_tension``: rings at or next to the free surface are held at rho >=
     rho0 (:meth:`surface_hold_radius`).
     Measured with the three together (examples/axisymmetric/robustness_results.md): the
@@ -824,7 +848,9 @@ class AxisymmetricFluid:
         if not shifting >= 0.0:
             raise ValueError(f"shifting must be >= 0 (the coefficient A), got {shifting!r}")
         #: False: the walls' extrapolated pressure is clipped at 0 (no suction)
-        self.wall_tension = bool(wall_tension)
+        if wall_tension not in (True, False, "bulk"):
+            raise ValueError(f'wall_tension must be True, False or "bulk", got {wall_tension!r}')
+        self.wall_tension = wall_tension
         if not (bulk_damping >= 0.0 and math.isfinite(bulk_damping)):
             raise ValueError(f"bulk_damping must be a finite number >= 0, got {bulk_damping!r}")
         self.bulk_damping = float(bulk_damping)
@@ -936,6 +962,17 @@ class AxisymmetricFluid:
             a += (self.axis_alpha - pa.alpha) * pa.c0 * w
         return a
 
+    def _surface_flags(self, src, m) -> np.ndarray:
+        """True on the real fluid rows (and their mirrors) at a free surface: lambda_min of
+        the previous evaluation below ``shift_surface_lambda`` (all False before the first)."""
+        out = np.zeros(m, dtype=np.bool_)
+        lam = getattr(self, "lam", None)
+        if lam is None:
+            return out
+        out[: self.n] = self.fluid & (lam < self.shift_surface_lambda)
+        out[self.n:] = out[src]
+        return out
+
     def _areas(self) -> np.ndarray:
         circ = 1.0 if self.planar else 2.0 * math.pi * np.maximum(self.x[:, 0], 1e-300)
         return np.where(self.fluid, self.M / (circ * self.rho), self.vol)
@@ -1038,6 +1075,9 @@ class AxisymmetricFluid:
         wall_state(x, v, rho, p, A, kind, nl.offsets, nl.indices, Rp, self.kcode, self.Lz,
                    self.gravity, pa.rho0, self.B, pa.gamma, vg,
                    -np.inf if self.wall_tension else 0.0)
+        if self.wall_tension == "bulk":
+            _clip_surface_walls(x, p, rho, kind, nl.offsets, nl.indices, Rp, self.Lz,
+                                self._surface_flags(src, m), pa.rho0, self.B, pa.gamma)
         mt[:n] = rho[:n] * A[:n]
         _fill_mirrors(n, src, mtype, zw, self.gravity[1], x, v, vg, rho, p, A, mt, mu, gr, dvdr,
                       Rp)

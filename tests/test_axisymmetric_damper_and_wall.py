@@ -1,6 +1,7 @@
 """The acoustic damper of the axisymmetric fluid (``bulk_damping``, a bulk viscosity
 nu_b = alpha_b h c0): a standing acoustic wave loses amplitude at the extra rate
-nu_b k^2 / 2, and a divergence-free flow is left as it is."""
+nu_b k^2 / 2, and a divergence-free flow is left as it is.  And the walls' tension under
+free-surface rings only (``wall_tension = "bulk"``)."""
 
 from __future__ import annotations
 
@@ -85,3 +86,28 @@ def test_damper_leaves_a_divergence_free_flow():
         runs.append(f.v[f.fluid].copy())
     diff = np.abs(runs[1] - runs[0]).max() / U
     assert diff < 1e-3
+
+
+def test_bulk_wall_tension_clips_only_under_surface_rings():
+    """``wall_tension = "bulk"``: a wall row with a free-surface ring within its support
+    loses its tension (p -> 0, rho -> rho0); one under bulk fluid keeps it; a bad value is
+    an error naming the keyword."""
+    from sphfem.fluid.axisymmetric import _clip_surface_walls
+    from sphfem.neighbors import build_neighbor_list
+
+    x = np.array([[1.0, 0.0], [10.0, 0.0], [1.0, 1.0], [10.0, 1.0]]) * DX
+    kind = np.array([WALL, WALL, FLUID, FLUID], np.int8)
+    p = np.array([-50.0, -50.0, -40.0, -40.0])
+    rho = np.array([999.0, 999.0, 999.0, 999.0])
+    surface = np.array([False, False, True, False])
+    nl = build_neighbor_list(x, 3 * DX, x.min(axis=0) - 3 * DX, x.max(axis=0) + 3 * DX,
+                             np.zeros(2))
+    _clip_surface_walls(x, p, rho, kind, nl.offsets, nl.indices, np.full(4, 3 * DX), 0.0,
+                        surface, 1000.0, 1.0, 7.0)
+    assert p[0] == 0.0 and rho[0] == 1000.0
+    assert p[1] == -50.0 and rho[1] == 999.0
+    assert p[2] == -40.0  # fluid rows untouched
+    with pytest.raises(ValueError, match="wall_tension"):
+        AxisymmetricFluid(np.full((1, 2), DX), np.zeros((1, 2)), np.full(1, 1000.0),
+                          np.array([FLUID], np.int8), 1.0, DX * DX, 3 * DX,
+                          FluidParams(rho0=1000.0, c0=C0), wall_tension="yes")
