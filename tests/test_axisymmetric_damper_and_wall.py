@@ -103,7 +103,7 @@ def test_bulk_wall_tension_clips_only_under_surface_rings():
     nl = build_neighbor_list(x, 3 * DX, x.min(axis=0) - 3 * DX, x.max(axis=0) + 3 * DX,
                              np.zeros(2))
     _clip_surface_walls(x, p, rho, kind, nl.offsets, nl.indices, np.full(4, 3 * DX), 0.0,
-                        surface, 1000.0, 1.0, 7.0)
+                        surface, 1000.0)
     assert p[0] == 0.0 and rho[0] == 1000.0
     assert p[1] == -50.0 and rho[1] == 999.0
     assert p[2] == -40.0  # fluid rows untouched

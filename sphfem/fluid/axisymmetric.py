@@ -176,7 +176,7 @@ def wall_state(x, v, rho, p, A, kind, offsets, indices, Rp, kcode, Lz, gravity, 
 
 
 @njit(cache=True)
-def _clip_surface_walls(x, p, rho, kind, offsets, indices, Rp, Lz, surface, rho0, B, gamma):
+def _clip_surface_walls(x, p, rho, kind, offsets, indices, Rp, Lz, surface, rho0):
     """``wall_tension = "bulk"``: a WALL row with a free-surface fluid ring (``surface``)
     within the pair support has its pressure clipped at 0 (and its density with it)."""
     for i in range(x.shape[0]):
@@ -1077,7 +1077,7 @@ class AxisymmetricFluid:
                    -np.inf if self.wall_tension else 0.0)
         if self.wall_tension == "bulk":
             _clip_surface_walls(x, p, rho, kind, nl.offsets, nl.indices, Rp, self.Lz,
-                                self._surface_flags(src, m), pa.rho0, self.B, pa.gamma)
+                                self._surface_flags(src, m), pa.rho0)
         mt[:n] = rho[:n] * A[:n]
         _fill_mirrors(n, src, mtype, zw, self.gravity[1], x, v, vg, rho, p, A, mt, mu, gr, dvdr,
                       Rp)
@@ -1100,7 +1100,7 @@ class AxisymmetricFluid:
         qh = qs if self.smooth_hoop else v[:, 0] / np.where(x[:, 0] != 0.0, x[:, 0], 1.0)
         if self.planar:  # the plain planar divergence of FluidSolver
             Bm[:, :3] = (1.0, 0.0, 1.0)
-        p_eos = p[:n].copy()
+        p_eos = p[:n].copy() if self.bulk_damping > 0.0 else p[:n]
         if self.bulk_damping > 0.0:  # the acoustic damper's bulk stress (class docstring)
             p[:n][fl] += (self.bulk_damping * 0.5 * self.Rp[fl] * pa.c0) * self.drho[fl]
         _fill_mirrors(n, src, mtype, zw, self.gravity[1], x, v, vg, rho, p, A, mt, mu, gr, dvdr,

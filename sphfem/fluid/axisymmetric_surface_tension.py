@@ -568,17 +568,14 @@ def half_disc_arcs(radius: float, dx: float, center_z: float = 0.0):
     dx') points at the polar angles (j + 1/2) pi / N_k, none on the axis.
 
     Returns ``(x, area)``: positions (r, z) and meridian areas pi rho_k dx' / N_k (the
-    half-annulus of arc k shared evenly; they sum to pi radius^2 / 2)."""
-    nr = max(1, int(round(radius / dx)))
-    dx = radius / nr
-    xs, areas = [], []
-    for k in range(nr):
-        rk = (k + 0.5) * dx
-        m = max(1, int(round(math.pi * rk / dx)))
-        th = (np.arange(m) + 0.5) * math.pi / m
-        xs.append(np.column_stack([rk * np.sin(th), center_z + rk * np.cos(th)]))
-        areas.append(np.full(m, math.pi * rk * dx / m))
-    return np.concatenate(xs), np.concatenate(areas)
+    half-annulus of arc k shared evenly; they sum to pi radius^2 / 2): the half r > 0 of
+    :func:`sphfem.geometry.shell_points` with :func:`sphfem.geometry.shell_areas`."""
+    from sphfem.geometry import Shape, shell_areas, shell_points
+
+    ball = Shape.sphere((0.0, float(center_z)), float(radius))
+    x = shell_points(ball, dx, 2)
+    x = x[x[:, 0] > 0.0]  # each circle's half r > 0, in its order
+    return x, shell_areas(x, ball, dx)
 
 
 def capillary_dt(rho, h, sigma) -> float:
