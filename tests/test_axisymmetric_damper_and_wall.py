@@ -103,11 +103,54 @@ def test_bulk_wall_tension_clips_only_under_surface_rings():
     nl = build_neighbor_list(x, 3 * DX, x.min(axis=0) - 3 * DX, x.max(axis=0) + 3 * DX,
                              np.zeros(2))
     _clip_surface_walls(x, p, rho, kind, nl.offsets, nl.indices, np.full(4, 3 * DX), 0.0,
-                        surface, 1000.0)
+                        surface.astype(float), 1000.0, 1.0e5, 7.0)
     assert p[0] == 0.0 and rho[0] == 1000.0
     assert p[1] == -50.0 and rho[1] == 999.0
     assert p[2] == -40.0  # fluid rows untouched
+    # a partial weight ("contact-line"): the tension scaled, the density the EOS's
+    p = np.array([-50.0, -50.0, -40.0, -40.0])
+    _clip_surface_walls(x, p, rho, kind, nl.offsets, nl.indices, np.full(4, 3 * DX), 0.0,
+                        np.array([0.0, 0.0, 0.4, 0.0]), 1000.0, 1.0e5, 7.0)
+    assert p[0] == pytest.approx(-30.0) and p[1] == -50.0
+    assert rho[0] == pytest.approx(1000.0 * (1.0 - 30.0 / 1.0e5) ** (1.0 / 7.0))
     with pytest.raises(ValueError, match="wall_tension"):
         AxisymmetricFluid(np.full((1, 2), DX), np.zeros((1, 2)), np.full(1, 1000.0),
                           np.array([FLUID], np.int8), 1.0, DX * DX, 3 * DX,
                           FluidParams(rho0=1000.0, c0=C0), wall_tension="yes")
+
+
+def test_contact_line_wall_tension_clips_only_at_the_film_edge():
+    """``wall_tension = "contact-line"``: a film two rings thick under tension (rho < rho0)
+    on a wall; after a step the wall rows under the film's end have lost their tension and
+    those under its middle (and at the axis, where the mirrors continue the film) keep it;
+    without wall normals it is an error naming the keyword."""
+    nf, nw = 24, 34
+    rf = (np.arange(nf) + 0.5) * DX
+    xf = np.column_stack([np.tile(rf, 2), np.repeat([0.5, 1.5], nf) * DX])
+    rw = (np.arange(nw) + 0.5) * DX
+    xw = np.column_stack([np.tile(rw, 3), np.repeat([-0.5, -1.5, -2.5], nw) * DX])
+    x = np.vstack([xf, xw])
+    kind = np.r_[np.full(len(xf), FLUID), np.full(len(xw), WALL)].astype(np.int8)
+    rho = np.where(kind == FLUID, 999.0, 1000.0)
+    M = rho * DX * DX * 2.0 * np.pi * x[:, 0]
+    nrm = np.where((kind == WALL)[:, None], [0.0, 1.0], 0.0)
+    pa = FluidParams(rho0=1000.0, c0=C0, mu=1e-3, delta=0.1, alpha=0.0)
+    f = AxisymmetricFluid(x, np.zeros_like(x), rho, kind, M, DX * DX, 3 * DX, pa,
+                          wall_normals=nrm, wall_tension="contact-line")
+    f.step(1e-6)
+    top = (kind == WALL) & (x[:, 1] > -DX)
+    pw = f.p[top]
+    p_mid = pw[(rw > 6 * DX) & (rw < 16 * DX)]
+    assert np.all(p_mid < 0.0)  # under the film: the tension kept
+    assert np.all(pw[rw < 2 * DX] < 0.0)  # at the axis too
+    edge = (rw > (nf - 1) * DX) & (rw < (nf + 2) * DX)
+    assert np.all(pw[edge] >= 0.0)  # at the film's end: clipped
+    assert f.contact_line[(kind == FLUID) & (x[:, 0] < (nf - 4) * DX)].max() == 0.0
+    g = AxisymmetricFluid(x, np.zeros_like(x), rho, kind, M, DX * DX, 3 * DX, pa,
+                          wall_normals=nrm, wall_tension=True)
+    g.step(1e-6)
+    assert np.all(g.p[top][edge] < 0.0)  # the full tension there without the clip
+    assert np.allclose(g.p[top][(rw > 6 * DX) & (rw < 16 * DX)], p_mid)
+    with pytest.raises(ValueError, match="contact-line"):
+        AxisymmetricFluid(x, np.zeros_like(x), rho, kind, M, DX * DX, 3 * DX, pa,
+                          wall_tension="contact-line")

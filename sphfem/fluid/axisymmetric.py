@@ -176,23 +176,30 @@ def wall_state(x, v, rho, p, A, kind, offsets, indices, Rp, kcode, Lz, gravity, 
 
 
 @njit(cache=True)
-def _clip_surface_walls(x, p, rho, kind, offsets, indices, Rp, Lz, surface, rho0):
-    """``wall_tension = "bulk"``: a WALL row with a free-surface fluid ring (``surface``)
-    within the pair support has its pressure clipped at 0 (and its density with it)."""
+def _clip_surface_walls(x, p, rho, kind, offsets, indices, Rp, Lz, clip, rho0, B, gamma):
+    """Wall rows lose tension next to flagged fluid rings (``wall_tension = "bulk"`` or
+    ``"contact-line"``): a WALL row with negative pressure and fluid rings j within the pair
+    support has p <- p (1 - max_j clip_j) (``clip`` in [0, 1] over the augmented rows) and
+    its density the equation of state's for it (clip 1: p = 0, rho = rho0)."""
     for i in range(x.shape[0]):
         if kind[i] != WALL or p[i] >= 0.0:
             continue
+        cmax = 0.0
         for jj in range(offsets[i], offsets[i + 1]):
             j = indices[jj]
-            if not surface[j]:
+            if clip[j] <= cmax:
                 continue
             r0 = x[i, 0] - x[j, 0]
             r1 = min_image(x[i, 1] - x[j, 1], Lz)
             R = 0.5 * (Rp[i] + Rp[j])
             if r0 * r0 + r1 * r1 < R * R:
-                p[i] = 0.0
-                rho[i] = rho0
-                break
+                cmax = clip[j]
+        if cmax >= 1.0:
+            p[i] = 0.0
+            rho[i] = rho0
+        elif cmax > 0.0:
+            p[i] *= 1.0 - cmax
+            rho[i] = tait_density(p[i], rho0, B, gamma)
 
 
 @njit(cache=True, parallel=True)
@@ -720,7 +727,11 @@ class AxisymmetricFluid:
     ``"bulk"`` (experimental): clipped only on the wall rows with a free-surface ring
     (lambda_min < ``shift_surface_lambda``, previous evaluation) within their support, so
     the tension stays under bulk fluid (the axis-wall corner) and goes at a contact line,
-    where it is the kernel's truncation.
+    where it is the kernel's truncation.  ``"contact-line"`` (experimental): clipped in
+    proportion to the contact-line weight of the fluid rings in the wall row's support
+    (:func:`sphfem.fluid.wall_layer.contact_line_weight`: 1 at the end of a wall row, 0 under
+    a film, however thin; previous step), so a thin film keeps its tension everywhere but at
+    its edge; needs ``wall_normals``.
     ``free_surface_no_tension``: rings at or next to the free surface are held at rho >=
     rho0 (:meth:`surface_hold_radius`).
     Measured with the three together (examples/axisymmetric/robustness_results.md): the
@@ -848,8 +859,9 @@ class AxisymmetricFluid:
         if not shifting >= 0.0:
             raise ValueError(f"shifting must be >= 0 (the coefficient A), got {shifting!r}")
         #: False: the walls' extrapolated pressure is clipped at 0 (no suction)
-        if wall_tension not in (True, False, "bulk"):
-            raise ValueError(f'wall_tension must be True, False or "bulk", got {wall_tension!r}')
+        if wall_tension not in (True, False, "bulk", "contact-line"):
+            raise ValueError(f'wall_tension must be True, False, "bulk" or "contact-line", got '
+                             f'{wall_tension!r}')
         self.wall_tension = wall_tension
         if not (bulk_damping >= 0.0 and math.isfinite(bulk_damping)):
             raise ValueError(f"bulk_damping must be a finite number >= 0, got {bulk_damping!r}")
@@ -919,14 +931,17 @@ class AxisymmetricFluid:
         self._layer_normals = None
         #: (list, count, j, d, f') of the last list build: the pairs gradients packs
         self._pairs = None
-        if wall_friction == "layer":
+        if wall_friction == "layer" or wall_tension == "contact-line":
             if self.wall_normals is None or not wl.any():
-                raise ValueError("wall_friction = 'layer' needs wall particles with wall "
-                                 "normals")
+                what = ("wall_friction = 'layer'" if wall_friction == "layer"
+                        else "wall_tension = 'contact-line'")
+                raise ValueError(f"{what} needs wall particles with wall normals")
+            #: wall spacing [m] (the layer of a wall row: contact_line_weight)
+            self.wall_dx = float(np.sqrt(np.median(self.vol[wl])))
+        if wall_friction == "layer":
             from sphfem.fluid.wall_layer import plug_traction_constant
 
-            #: wall spacing [m] and the lattice constant S of eq. (1)
-            self.wall_dx = float(np.sqrt(np.median(self.vol[wl])))
+            #: the lattice constant S of eq. (1)
             self.wall_S = plug_traction_constant(kernel, self.R / self.wall_dx,
                                                  params.eps_visc)
         #: the kinematic wall condition on the position update (needs ``wall_normals``)
@@ -962,14 +977,21 @@ class AxisymmetricFluid:
             a += (self.axis_alpha - pa.alpha) * pa.c0 * w
         return a
 
-    def _surface_flags(self, src, m) -> np.ndarray:
-        """True on the real fluid rows (and their mirrors) at a free surface: lambda_min of
-        the previous evaluation below ``shift_surface_lambda`` (all False before the first)."""
-        out = np.zeros(m, dtype=np.bool_)
-        lam = getattr(self, "lam", None)
-        if lam is None:
-            return out
-        out[: self.n] = self.fluid & (lam < self.shift_surface_lambda)
+    def _clip_weights(self, src, m) -> np.ndarray:
+        """Per augmented row, how much a wall row next to it loses its tension
+        (:func:`_clip_surface_walls`), from the previous evaluation (all 0 before the first):
+        ``"bulk"``: 1 on the fluid rows at a free surface (lambda_min below
+        ``shift_surface_lambda``); ``"contact-line"``: the contact-line weight of the fluid
+        rows (:func:`sphfem.fluid.wall_layer.contact_line_weight`: 1 at the end of a wall
+        row, 0 under a film)."""
+        out = np.zeros(m)
+        if self.wall_tension == "contact-line":
+            out[: self.n] = self.contact_line
+        else:
+            lam = getattr(self, "lam", None)
+            if lam is None:
+                return out
+            out[: self.n] = self.fluid & (lam < self.shift_surface_lambda)
         out[self.n:] = out[src]
         return out
 
@@ -1075,9 +1097,9 @@ class AxisymmetricFluid:
         wall_state(x, v, rho, p, A, kind, nl.offsets, nl.indices, Rp, self.kcode, self.Lz,
                    self.gravity, pa.rho0, self.B, pa.gamma, vg,
                    -np.inf if self.wall_tension else 0.0)
-        if self.wall_tension == "bulk":
+        if self.wall_tension in ("bulk", "contact-line"):
             _clip_surface_walls(x, p, rho, kind, nl.offsets, nl.indices, Rp, self.Lz,
-                                self._surface_flags(src, m), pa.rho0)
+                                self._clip_weights(src, m), pa.rho0, self.B, pa.gamma)
         mt[:n] = rho[:n] * A[:n]
         _fill_mirrors(n, src, mtype, zw, self.gravity[1], x, v, vg, rho, p, A, mt, mu, gr, dvdr,
                       Rp)
@@ -1123,7 +1145,7 @@ class AxisymmetricFluid:
         #: the renormalised velocity gradient (L00, L01, L10, L11) of the real rows (a view
         #: of this evaluation's array)
         self.gradv = gradv[:n]
-        if self.wall_friction == "layer":
+        if self.wall_friction == "layer" or self.wall_tension == "contact-line":
             self._layer_inputs(x, kind, nl, Rp, src, mtype, gradv, qh)
         if self.csf is not None:  # CSF over the fluid's widest support (adaptive_h)
             self.csf.accumulate(x, A, rho, kind, nl.offsets, nl.indices, n, src, mtype,
@@ -1168,19 +1190,23 @@ class AxisymmetricFluid:
 
     def _advance_layer(self, dt: float) -> None:
         """Eq. (2) of :mod:`sphfem.fluid.wall_layer` over dt from the last evaluation, then
-        the friction factors of the next evaluations (eq. 3)."""
+        the friction factors of the next evaluations (eq. 3; ``wall_friction = "layer"``),
+        and the contact-line weights of the band rows (the layer's friction, the
+        ``"contact-line"`` wall tension)."""
         from sphfem.fluid.wall_layer import advance_layer, contact_line_weight, friction_factor
 
         band, a, x, nl, Rp, bn, kind = self._layer
+        cl = self.contact_line
+        contact_line_weight(x, (kind == FLUID) | (kind == MIRROR_FLUID), nl.offsets,
+                            nl.indices, band, bn, self.n, Rp, self.kcode, 0.75 * self.wall_dx,
+                            np.array([0.0, float(self.Lz)]), cl)
+        if self.wall_friction != "layer":
+            return
         nu = self.params.mu / self.params.rho0
         advance_layer(self.delta2, band, a, nu, dt, float(self.R) ** 2, x, nl.offsets,
                       nl.indices, Rp, self.kcode)
         fw = friction_factor(self.delta2, self.wall_dx, self.wall_S, nu, dt, self.h,
                              self.params.visc_cfl)
-        cl = self.contact_line
-        contact_line_weight(x, (kind == FLUID) | (kind == MIRROR_FLUID), nl.offsets,
-                            nl.indices, band, bn, self.n, Rp, self.kcode, 0.75 * self.wall_dx,
-                            np.array([0.0, float(self.Lz)]), cl)
         self.fw = 1.0 + (fw - 1.0) * (1.0 - cl)
 
     def _list_valid(self, R: float) -> bool:
