@@ -292,7 +292,10 @@ class SubstrateHeat:
     def _fluid(self, ps):
         from sphfem.particles import FLUID
 
-        return np.flatnonzero(ps.kind == FLUID)
+        fl = ps.kind == FLUID
+        if "k_heat" in ps:  # rings taken out of the heat (axisymmetric debris) are not wet
+            fl &= ps.k_heat != 0.0
+        return np.flatnonzero(fl)
 
     def exchange(self, ps, t: float) -> None:
         """One coupling step ending at ``t``: exchange over t - (the previous call's t)

@@ -263,7 +263,7 @@ class AxisymmetricFluidModule(PhysicsModule):
     fluid_options = {"adaptive_h": False, "wall_tension": True,
                      "free_surface_no_tension": True, "fragment_hoop": False,
                      "csf_axis_curvature": True, "csf_curvature_smoothing": 2.0,
-                     "bulk_damping": 0.5}
+                     "bulk_damping": 0.5, "debris_rings": 16}
     # bulk_damping: the acoustic damper (sphfem.fluid.axisymmetric.AxisymmetricFluid).  The
     # delta term leaves smooth fields alone, so the impact's acoustic waves rang through the
     # lamella undamped: +-1 rho V^2 at 1 t_c in the 10 m/s impact at D/dx 181 (c0 = 10 V),
@@ -271,6 +271,11 @@ class AxisymmetricFluidModule(PhysicsModule):
     # With 0.5 the field is the smooth stagnation flow's (docs/validation/droplet_impact,
     # session 27); its bulk stress is ~0.5 (h / c0) / T of the pressure of a flow changing
     # over T (0.4 % at D/dx 181 for T = 0.1 t_c), and it vanishes with h
+    # debris_rings: free-flying clusters of at most 16 rings (no ring of them with a full
+    # support) become inert (sphfem.fluid.axisymmetric_debris): a two-ring torus thrown off
+    # the rim of the 10 m/s impact at D/dx 181 reached the axis at 2.58 t_c and blew up
+    # there (5 rho0, 1.7e4 m/s; docs/validation/droplet_impact, session 28).  Inert rings
+    # also leave the heat (k_heat = 0, their temperature kept) and the contact interface
     #: the AxisymmetricFluid keywords this module sets itself, from scene keys (e.g.
     #: ``fluid.shifting``) and its class constants; the solver's other keywords come from
     #: ``fluid_options`` (tests/test_level_run_options.py holds the two sets to the call)
@@ -448,14 +453,26 @@ class AxisymmetricFluidModule(PhysicsModule):
         thicknesses and friction factors, ``[fluid] wall_friction = "layer"``)."""
         st = super().checkpoint_state(ctx)
         st["_wall_layer"] = (self.solver.delta2.copy(), self.solver.fw.copy())
+        st["_inert"] = np.flatnonzero(self.solver.inert)
         return st
 
     def restore_state(self, ctx, state: dict) -> None:
         state = dict(state)
         layer = state.pop("_wall_layer", None)
+        inert = state.pop("_inert", None)
         super().restore_state(ctx, state)
         if layer is not None:
             self.solver.delta2[:], self.solver.fw[:] = layer
+        if inert is not None and len(inert):
+            self.solver.make_inert(np.asarray(inert, np.int64))
+            self._inert_heat(ctx, inert)
+
+    def _inert_heat(self, ctx, rows) -> None:
+        """Inert rings (debris) leave the heat: k_heat = 0 (the heat module and the contact
+        interface skip them; their temperature is kept)."""
+        ps = ctx.particles
+        if "k_heat" in ps:
+            ps.k_heat[self.idx[np.asarray(rows, np.int64)]] = 0.0
 
     def step(self, ctx, dt: float) -> None:
         from sphfem.errors import SimulationStopped
@@ -469,6 +486,11 @@ class AxisymmetricFluidModule(PhysicsModule):
                                     f"fluid ring {self._depth(s):.2f} dx below the wall "
                                     "top)") from None
         self._write_back(ctx)
+        if s.debris_events and s.debris_events[-1][0] == s.t:  # found at this step
+            rows = s.debris_events[-1][1]
+            self._inert_heat(ctx, rows)
+            logger.info("axisymmetric fluid: %d ring(s) of free-flying debris made inert at "
+                        "t = %g s (counted in summary.json, fluid.debris)", rows.size, s.t)
         self._correction_forces(ctx, v_n, dt)
         depth = self._depth(s)
         self.max_depth = max(self.max_depth, depth)
@@ -502,7 +524,7 @@ class AxisymmetricFluidModule(PhysicsModule):
         does not count (it is reported by the domain-box check)."""
         if self.wall_top is None:
             return 0.0
-        x = s.x[self.fl]
+        x = s.x[self.fl & ~s.inert]
         z = x[x[:, 0] <= self._wall_r_max, 1]
         return float((self.wall_top - z.min()) / self.dx) if z.size else -math.inf
 
@@ -632,6 +654,11 @@ class AxisymmetricFluidModule(PhysicsModule):
         d["rings_outside_domain"] = {"count": int(out.sum()),
                                      "mass_fraction": float(ps.m[out].sum() / ps.m[fl].sum()),
                                      "t_first_s": self.t_escape}
+        # free-flying debris made inert (fluid_options["debris_rings"])
+        inert = s.inert
+        d["debris"] = {"max_rings": s.debris_rings, "count": int(inert.sum()),
+                       "mass_fraction": float(s.M[inert].sum() / max(s.total_mass(), 1e-300)),
+                       "t_first_s": s.debris_events[0][0] if s.debris_events else None}
         d["wall_friction"] = {"model": s.wall_friction}
         if s.wall_friction == "layer":
             band = s.delta2 >= 0.0

@@ -116,6 +116,10 @@ from sphfem.neighbors import build_neighbor_list, min_image
 from sphfem.particles import FLUID, WALL
 from sphfem.smallmat import invert_sym3
 
+#: kind code of the inert rings (debris): beyond every pair filter's masks, so no list
+#: holds them (sphfem.neighbors.build_neighbor_list)
+INERT = 6
+
 
 def _keep_masks():
     keep = [0] * (MIRROR_WALL + 1)
@@ -787,6 +791,13 @@ class AxisymmetricFluid:
     index (the mirrors of the longer reach are a superset in the same order), so the steps
     are those of a list rebuilt at every evaluation to the bit (test); 0 rebuilds it every
     time.
+
+    ``debris_rings`` (> 0): every DEBRIS_EVERY steps the free-flying clusters of at most this
+    many rings (clear of the walls by R) become inert (:mod:`sphfem.fluid.axisymmetric_debris`:
+    a torus of a few rings moving towards the axis cannot thicken as a resolved one does,
+    and blew the 10 m/s impact at D/dx 181 up at the axis): no pair sum holds them, they fly
+    ballistically with their mass, momentum and density (:meth:`find_debris`,
+    :attr:`inert`, :attr:`debris_events`).  Needs an open z.
     """
 
     def __init__(self, x, v, rho, kind, M, vol, R, params: FluidParams,
@@ -802,7 +813,7 @@ class AxisymmetricFluid:
                  axis_alpha: float = 0.0, csf_meridian: str = "csf",
                  shift_surface_lambda: float = 0.75, shift_drift: str = "kept",
                  axis_floor: float = 0.0, stress_plane: float | None = None,
-                 bulk_damping: float = 0.0):
+                 bulk_damping: float = 0.0, debris_rings: int = 0):
         self.x = np.array(x, dtype=np.float64)
         n = self.n = self.x.shape[0]
         self.v = np.array(v, dtype=np.float64).reshape(n, 2)
@@ -866,6 +877,17 @@ class AxisymmetricFluid:
         if not (bulk_damping >= 0.0 and math.isfinite(bulk_damping)):
             raise ValueError(f"bulk_damping must be a finite number >= 0, got {bulk_damping!r}")
         self.bulk_damping = float(bulk_damping)
+        if not (isinstance(debris_rings, (int, np.integer)) and debris_rings >= 0):
+            raise ValueError(f"debris_rings must be an integer >= 0, got {debris_rings!r}")
+        if debris_rings and periodic_z is not None:
+            raise ValueError("debris_rings needs an open z (no periodic_z)")
+        #: free-flying clusters of at most this many rings become inert (0: off; class
+        #: docstring, :mod:`sphfem.fluid.axisymmetric_debris`)
+        self.debris_rings = int(debris_rings)
+        #: the inert rings (debris): in no pair sum, flying ballistically
+        self.inert = np.zeros(n, bool)
+        #: (t [s], rows) of each debris detection that found some
+        self.debris_events: list[tuple[float, np.ndarray]] = []
         #: True: rings at or next to the free surface (lambda < 0.75) keep rho >= rho0
         self.free_surface_no_tension = bool(free_surface_no_tension)
         #: particle shifting coefficient A of dr = -A h |v| dt grad C (0: off)
@@ -997,7 +1019,7 @@ class AxisymmetricFluid:
 
     def _areas(self) -> np.ndarray:
         circ = 1.0 if self.planar else 2.0 * math.pi * np.maximum(self.x[:, 0], 1e-300)
-        return np.where(self.fluid, self.M / (circ * self.rho), self.vol)
+        return np.where(self.fluid | self.inert, self.M / (circ * self.rho), self.vol)
 
     def support_radii(self, A) -> np.ndarray:
         """Per-particle support radii: R everywhere, or with ``adaptive_h`` R_i = R
@@ -1149,7 +1171,7 @@ class AxisymmetricFluid:
             self._layer_inputs(x, kind, nl, Rp, src, mtype, gradv, qh)
         if self.csf is not None:  # CSF over the fluid's widest support (adaptive_h)
             self.csf.accumulate(x, A, rho, kind, nl.offsets, nl.indices, n, src, mtype,
-                                float(Rp[:n][self.fluid].max()), self.Lz, acc,
+                                float(Rp[:n][self.fluid].max(initial=self.R)), self.Lz, acc,
                                 lam=Bm[:n, 4])
         self.acc[:] = acc[:n]
         self.drho[:] = drho[:n]
@@ -1239,6 +1261,8 @@ class AxisymmetricFluid:
         pa = self.params
         vmax, amax, rmin, rhomin = _fluid_extrema(self._fidx, self.v, self.acc, self.Rp,
                                                   self.rho)
+        if not self._fidx.size:  # no fluid left in the pair sums (all of it inert debris)
+            vmax, amax, rmin, rhomin = 0.0, 0.0, self.R, pa.rho0
         h = 0.5 * rmin
         lim = {"acoustic": pa.cfl * h / (pa.c0 + vmax)}
         if pa.mu > 0:
@@ -1272,8 +1296,12 @@ class AxisymmetricFluid:
         if self.shifting > 0.0:
             self._shift(dt)
         self._reflect()
+        if self.inert.any():
+            self._fly_inert(dt)
         self.t += dt
         self.step_count += 1
+        if self.debris_rings and self.step_count % self.DEBRIS_EVERY == 0:
+            self.find_debris()
         if not _all_finite(fi, self.x, self.rho):
             raise FloatingPointError(f"axisymmetric fluid: non-finite state at step "
                                      f"{self.step_count}, t = {self.t:.4g} s")
@@ -1373,6 +1401,51 @@ class AxisymmetricFluid:
                 self.penetration_corrections += 1
                 self.x[fi], self.v[fi] = xs, vs
 
+    #: steps between two debris searches (``debris_rings``)
+    DEBRIS_EVERY = 20
+    #: debris: rings closer than this many reference spacings sqrt(a_ref) are linked
+    DEBRIS_LINK = 2.0
+
+    def find_debris(self) -> np.ndarray:
+        """Make the free-flying clusters of at most ``debris_rings`` rings inert
+        (:func:`sphfem.fluid.axisymmetric_debris.free_debris`: links of DEBRIS_LINK
+        sqrt(a_ref), clear of the wall rings and plane by the support R).  Returns the rows
+        made inert now."""
+        from sphfem.fluid.axisymmetric_debris import free_debris
+
+        wl = self.kind == WALL
+        rows = free_debris(self.x, self._fidx, self.DEBRIS_LINK * math.sqrt(self.a_ref),
+                           self.debris_rings, self.x[wl] if wl.any() else None,
+                           float(self.Rp.max()), self.wall_z)
+        if rows.size:
+            self.make_inert(rows)
+            self.debris_events.append((self.t, rows))
+        return rows
+
+    def make_inert(self, rows) -> None:
+        """Take the fluid ``rows`` out of every pair sum (kind INERT: no neighbour list holds
+        them) and fly them ballistically from now on; masses, velocities, densities kept."""
+        rows = np.asarray(rows, np.int64)
+        if not np.all(self.fluid[rows] | self.inert[rows]):
+            raise ValueError("make_inert: only fluid rows can become inert")
+        self.kind[rows] = INERT
+        self.fluid[rows] = False
+        self.inert[rows] = True
+        self.mu[rows] = 0.0
+        self.acc[rows] = self.gravity
+        self.drho[rows] = 0.0
+        self._fidx = np.flatnonzero(self.fluid)
+        self._list = None  # the kinds changed: a new list
+
+    def _fly_inert(self, dt: float) -> None:
+        """Ballistic flight of the inert rings over dt under gravity, reflected at the axis
+        (and the wall plane)."""
+        q = np.flatnonzero(self.inert)
+        self.x[q] += dt * self.v[q] + 0.5 * dt * dt * self.gravity
+        self.v[q] += dt * self.gravity
+        _reflect_axis(q, self.x, self.v, self.wall_z is not None,
+                      0.0 if self.wall_z is None else self.wall_z, self.axis_floor)
+
     def run(self, t_end: float, callback=None, every: float | None = None) -> int:
         """Step to ``t_end`` with the stable step, ``callback(self)`` every ``every`` s."""
         next_cb = self.t + every if every else math.inf
@@ -1388,5 +1461,6 @@ class AxisymmetricFluid:
         return self.step_count
 
     def total_mass(self) -> float:
-        """sum of the fluid's ring masses [kg] (constant by construction)."""
-        return float(self.M[self.fluid].sum())
+        """sum of the fluid's ring masses [kg], inert rings included (constant by
+        construction)."""
+        return float(self.M[self.fluid | self.inert].sum())

@@ -1,0 +1,104 @@
+"""Debris of the axisymmetric fluid (sphfem.fluid.axisymmetric_debris): free-flying clusters
+of a few rings are found, clusters touching a wall are not, and the fluid makes them inert
+(out of every pair sum, ballistic, mass kept) instead of letting a torus of two rings blow up
+at the axis."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from sphfem.fluid.axisymmetric import INERT, AxisymmetricFluid
+from sphfem.fluid.axisymmetric_debris import free_debris
+from sphfem.fluid.wcsph import FluidParams
+from sphfem.particles import FLUID, WALL
+
+DX = 1e-4 / 181  # the spacing of the D/dx 181 droplet impact
+
+
+def _block(r0, z0, nr, nz):
+    r = r0 + np.arange(nr) * DX
+    z = z0 + np.arange(nz) * DX
+    return np.column_stack([q.ravel() for q in np.meshgrid(r, z, indexing="ij")])
+
+
+def test_free_debris_finds_small_free_clusters_only():
+    body = _block(0.5 * DX, 0.5 * DX, 20, 10)  # 200 rings on the wall
+    pair = np.array([[40.0, 30.0], [40.8, 30.5]]) * DX  # free, 2 rings
+    sliding = np.array([[60.0, 0.5], [61.0, 0.5]]) * DX  # 2 rings on the wall
+    blob = _block(80 * DX, 30 * DX, 5, 4)  # free, 20 rings
+    x = np.vstack([body, pair, sliding, blob])
+    rows = np.arange(len(x))
+    walls = _block(0.5 * DX, -2.5 * DX, 100, 3)
+    found = free_debris(x, rows, 2 * DX, 16, walls, 3 * DX)
+    assert found.tolist() == [200, 201]
+    # the blob is debris with a larger limit; the sliding pair never
+    found = free_debris(x, rows, 2 * DX, 20, walls, 3 * DX)
+    assert found.tolist() == [200, 201] + list(range(204, 224))
+    # a wall plane instead of wall rings: the same
+    found = free_debris(x, rows, 2 * DX, 16, None, 3 * DX, wall_z=0.0)
+    assert found.tolist() == [200, 201]
+    assert free_debris(x, rows, 2 * DX, 0, walls, 3 * DX).size == 0
+
+
+def _pair_towards_axis(debris_rings):
+    """Two rings at r ~ 130 dx flying towards the axis and up at (-6.43, 2.52) m/s with
+    surface tension (the debris of the D/dx 181 impact, session 28), no walls."""
+    x = np.array([[130.0, 80.0], [130.7, 80.7]]) * DX
+    v = np.array([[-6.43, 2.52], [-6.43, 2.52]])
+    rho = np.full(2, 1000.0)
+    M = rho * DX * DX * 2 * np.pi * x[:, 0]
+    pa = FluidParams(rho0=1000.0, c0=100.0, mu=3e-4, delta=0.1, alpha=0.02)
+    return AxisymmetricFluid(x, v, rho, np.full(2, FLUID, np.int8), M, DX * DX, 3 * DX, pa,
+                             surface_tension=0.072, free_surface_no_tension=True,
+                             fragment_hoop=False, axis_floor=0.25 * DX,
+                             debris_rings=debris_rings), M.sum()
+
+
+def test_debris_made_inert_flies_ballistically_through_the_axis():
+    f, m0 = _pair_towards_axis(16)
+    while not f.inert.all():
+        f.step(f.stable_dt())
+    assert f.step_count == AxisymmetricFluid.DEBRIS_EVERY
+    assert (f.kind == INERT).all() and not f.fluid.any()
+    x0, v0, rho0, t0 = f.x.copy(), f.v.copy(), f.rho.copy(), f.t
+    while f.t < 4.0e-5:
+        f.step(f.stable_dt())
+    # through the axis (reflected at the axis floor) and out again, on straight lines,
+    # nothing else changed
+    T = f.t - t0
+    assert np.all(f.x[:, 0] > 100 * DX) and np.all(f.v[:, 0] > 0.0)
+    floor = f.axis_floor
+    ballistic = np.column_stack([floor + np.abs(x0[:, 0] + T * v0[:, 0] - floor),
+                                 x0[:, 1] + T * v0[:, 1]])
+    assert np.allclose(f.x, ballistic, rtol=0, atol=1e-6 * DX)
+    assert np.array_equal(f.rho, rho0)
+    assert f.total_mass() == pytest.approx(m0, rel=1e-15)
+    assert f.debris_events and f.debris_events[0][1].tolist() == [0, 1]
+
+
+def test_without_debris_the_pair_compresses_towards_the_axis():
+    """The defect the debris treatment removes: the same pair left in the pair sums gains
+    density on its way in (CSF-driven pair vibration) - checked over the first half."""
+    f, _ = _pair_towards_axis(0)
+    while f.x[:, 0].min() > 60 * DX:
+        f.step(f.stable_dt())
+    assert f.rho.max() > 1.02 * 1000.0
+
+
+def test_debris_rings_bad_values():
+    x = np.array([[1.0, 1.0]]) * DX
+    args = (x, np.zeros((1, 2)), np.full(1, 1000.0), np.array([FLUID], np.int8), 1.0,
+            DX * DX, 3 * DX, FluidParams(rho0=1000.0, c0=10.0))
+    with pytest.raises(ValueError, match="debris_rings"):
+        AxisymmetricFluid(*args, debris_rings=-1)
+    with pytest.raises(ValueError, match="debris_rings"):
+        AxisymmetricFluid(*args, debris_rings=4, periodic_z=(0.0, 20 * DX))
+    f = AxisymmetricFluid(*args, debris_rings=0)
+    with pytest.raises(ValueError, match="only fluid rows"):
+        xw = np.vstack([x, [[1.0, -1.0]]])
+        g = AxisymmetricFluid(xw, np.zeros((2, 2)), np.full(2, 1000.0),
+                              np.array([FLUID, WALL], np.int8), 1.0, DX * DX, 3 * DX,
+                              FluidParams(rho0=1000.0, c0=10.0))
+        g.make_inert([1])
+    assert f.debris_rings == 0
