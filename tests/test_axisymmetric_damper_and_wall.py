@@ -154,3 +154,33 @@ def test_contact_line_wall_tension_clips_only_at_the_film_edge():
     with pytest.raises(ValueError, match="contact-line"):
         AxisymmetricFluid(x, np.zeros_like(x), rho, kind, M, DX * DX, 3 * DX, pa,
                           wall_tension="contact-line")
+
+
+def test_contact_line_slip_frees_the_film_edge_only():
+    """``contact_line_slip``: with the wall layer's friction a film sliding out along the wall
+    has friction factor ~0 on the rings at its end (the contact line) instead of >= 1, and the
+    same factor as without the option under its middle."""
+    nf, nw = 24, 34
+    rf = (np.arange(nf) + 0.5) * DX
+    xf = np.column_stack([np.tile(rf, 2), np.repeat([0.5, 1.5], nf) * DX])
+    rw = (np.arange(nw) + 0.5) * DX
+    xw = np.column_stack([np.tile(rw, 3), np.repeat([-0.5, -1.5, -2.5], nw) * DX])
+    x = np.vstack([xf, xw])
+    kind = np.r_[np.full(len(xf), FLUID), np.full(len(xw), WALL)].astype(np.int8)
+    rho = np.full(len(x), 1000.0)
+    M = rho * DX * DX * 2.0 * np.pi * x[:, 0]
+    v = np.where((kind == FLUID)[:, None], [0.01, 0.0], 0.0)
+    nrm = np.where((kind == WALL)[:, None], [0.0, 1.0], 0.0)
+    pa = FluidParams(rho0=1000.0, c0=C0, mu=1e-3, delta=0.1, alpha=0.0)
+    fw = {}
+    for slip in (False, True):
+        f = AxisymmetricFluid(x, v, rho, kind, M, DX * DX, 3 * DX, pa, wall_normals=nrm,
+                              wall_friction="layer", contact_line_slip=slip)
+        f.step(1e-5)
+        fw[slip] = f.fw.copy()
+    fl = kind == FLUID
+    end = fl & (x[:, 0] > (nf - 1) * DX) & (x[:, 1] < DX)
+    mid = fl & (x[:, 0] > 6 * DX) & (x[:, 0] < 16 * DX)
+    assert np.all(fw[False][end] >= 1.0)
+    assert np.all(fw[True][end] < 0.05)
+    assert np.array_equal(fw[True][mid], fw[False][mid])

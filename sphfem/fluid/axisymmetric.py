@@ -792,6 +792,13 @@ class AxisymmetricFluid:
     are those of a list rebuilt at every evaluation to the bit (test); 0 rebuilds it every
     time.
 
+    ``contact_line_slip`` (experimental; ``wall_friction = "layer"``): the rings at the end of
+    a wall row slide freely, f_i <- f_i (1 - w_i) with the contact-line weight w_i
+    (:func:`sphfem.fluid.wall_layer.contact_line_weight`), instead of the plain no-slip
+    term there (f_i <- 1 + (f_i - 1)(1 - w_i)): a Navier slip over the contact line's own
+    rings, which regularises the moving contact line's stress singularity (Huh & Scriven
+    1971) over one support.
+
     ``debris_rings`` (> 0): every DEBRIS_EVERY steps the free-flying clusters of at most this
     many rings (clear of the walls by R) become inert (:mod:`sphfem.fluid.axisymmetric_debris`:
     a torus of a few rings moving towards the axis cannot thicken as a resolved one does,
@@ -813,7 +820,8 @@ class AxisymmetricFluid:
                  axis_alpha: float = 0.0, csf_meridian: str = "csf",
                  shift_surface_lambda: float = 0.75, shift_drift: str = "kept",
                  axis_floor: float = 0.0, stress_plane: float | None = None,
-                 bulk_damping: float = 0.0, debris_rings: int = 0):
+                 bulk_damping: float = 0.0, debris_rings: int = 0,
+                 contact_line_slip: bool = False):
         self.x = np.array(x, dtype=np.float64)
         n = self.n = self.x.shape[0]
         self.v = np.array(v, dtype=np.float64).reshape(n, 2)
@@ -884,6 +892,9 @@ class AxisymmetricFluid:
         #: free-flying clusters of at most this many rings become inert (0: off; class
         #: docstring, :mod:`sphfem.fluid.axisymmetric_debris`)
         self.debris_rings = int(debris_rings)
+        #: True: the wall layer's friction factor goes to 0 (not to 1) at the contact line
+        #: (``wall_friction = "layer"``; class docstring)
+        self.contact_line_slip = bool(contact_line_slip)
         #: the inert rings (debris): in no pair sum, flying ballistically
         self.inert = np.zeros(n, bool)
         #: (t [s], rows) of each debris detection that found some
@@ -1229,7 +1240,10 @@ class AxisymmetricFluid:
                       nl.indices, Rp, self.kcode)
         fw = friction_factor(self.delta2, self.wall_dx, self.wall_S, nu, dt, self.h,
                              self.params.visc_cfl)
-        self.fw = 1.0 + (fw - 1.0) * (1.0 - cl)
+        if self.contact_line_slip:  # the contact line's rings slide freely
+            self.fw = fw * (1.0 - cl)
+        else:
+            self.fw = 1.0 + (fw - 1.0) * (1.0 - cl)
 
     def _list_valid(self, R: float) -> bool:
         """True when the list of the last build still holds every pair and mirror within R:
