@@ -289,11 +289,14 @@ class SubstrateHeat:
             ps.k_heat[sel] = 0.0
         ctx.neighbors(rebuild=True)
 
-    def _fluid(self, ps):
+    def _fluid(self, ps, wet_only: bool = True):
+        """The fluid rows; ``wet_only``: those that can wet the substrate (rings taken out
+        of the heat, k_heat = 0 -- axisymmetric debris -- cannot); all of them for the
+        fluid's energy."""
         from sphfem.particles import FLUID
 
         fl = ps.kind == FLUID
-        if "k_heat" in ps:  # rings taken out of the heat (axisymmetric debris) are not wet
+        if wet_only and "k_heat" in ps:
             fl &= ps.k_heat != 0.0
         return np.flatnonzero(fl)
 
@@ -304,7 +307,8 @@ class SubstrateHeat:
 
         f = self._fluid(ps)
         if self.fluid_e0 is None:
-            self.fluid_e0 = float(np.sum(ps.m[f] * ps.c_heat[f] * ps.T[f]))
+            fa = self._fluid(ps, wet_only=False)
+            self.fluid_e0 = float(np.sum(ps.m[fa] * ps.c_heat[fa] * ps.T[fa]))
         if self.t_last is None or t <= self.t_last:
             self.t_last = t if self.t_last is None else self.t_last
             return
@@ -391,7 +395,7 @@ class SubstrateHeat:
             "wall_s": {"setup": self.setup_s, **self.timings},
             "history": self.history}
         if ps is not None and self.fluid_e0 is not None:
-            f = self._fluid(ps)
+            f = self._fluid(ps, wet_only=False)
             lost = self.fluid_e0 - float(np.sum(ps.m[f] * ps.c_heat[f] * ps.T[f]))
             d["heat_lost_by_fluid_J"] = lost
             d["fluid_substrate_residual_rel"] = ((lost - itf.heat_to_substrate)
