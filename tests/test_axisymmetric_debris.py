@@ -102,3 +102,46 @@ def test_debris_rings_bad_values():
                               FluidParams(rho0=1000.0, c0=10.0))
         g.make_inert([1])
     assert f.debris_rings == 0
+
+
+@pytest.fixture(scope="module")
+def short_coupled_run(tmp_path_factory):
+    """The droplet job (fluid, ring heat, fem-contact substrate heat, fem-axisymmetric
+    stress) at D/dx 16 to 0.05 t_c."""
+    from sphfem.scene import parse_scene
+    from sphfem.simulation import Simulation
+    from sphfem.validation import droplet_impact as di
+
+    out = tmp_path_factory.mktemp("debris")
+    sim = Simulation(parse_scene(di.scene_at(10, 16, 0.05), source="<test>"), source="<test>")
+    sim.run(out, progress=False)
+    return sim
+
+
+def test_the_scene_module_takes_debris_out_of_the_heat_and_reports_it(short_coupled_run):
+    """The axisymmetric scene's fluid module: inert rings get k_heat = 0 (the heat module and
+    the contact interface skip them), the fluid's energy for the coupling's balance still
+    counts them, summary.json reports them, and a checkpoint restores them."""
+    sim = short_coupled_run
+    ctx, ps = sim.ctx, sim.ctx.particles
+    fm = next(m for m in sim.modules if m.name == "fluid")
+    s = fm.solver
+    assert s.debris_rings == 16 and not s.inert.any()
+    top = np.argsort(s.x[:, 1])[-2:]  # two rings at the droplet's top
+    state = fm.checkpoint_state(ctx)
+    s.make_inert(top)
+    fm._inert_heat(ctx, top)
+    assert np.all(ps.k_heat[fm.idx[top]] == 0.0)
+    d = fm.diagnostics(ctx)["debris"]
+    assert d["count"] == 2 and d["mass_fraction"] == pytest.approx(
+        s.M[top].sum() / s.total_mass())
+    cm = next(m for m in sim.modules if m.name == "coupling")
+    sh = cm.driver.thermal  # the fem-contact substrate heat
+    wet = sh._fluid(ps)
+    every = sh._fluid(ps, wet_only=False)
+    assert set(fm.idx[top]) <= set(every) and not set(fm.idx[top]) & set(wet)
+    assert every.size == wet.size + 2
+    st = fm.checkpoint_state(ctx)
+    assert st["_inert"].tolist() == sorted(top.tolist())
+    # the checkpoint written before makes no ring inert; the later one does
+    assert state["_inert"].size == 0
