@@ -260,7 +260,7 @@ class AxisymmetricFluidModule(PhysicsModule):
     #: centre of the 10 m/s lamella flowed inwards and broke up from 2.0-2.6 t_c at D/dx 90
     #: and 128 (and 181), with it the centre stays whole to 4 t_c at 128 (session 13,
     #: docs/validation/droplet_impact/README.md)
-    fluid_options = {"adaptive_h": False, "wall_tension": True,
+    fluid_options = {"adaptive_h": False, "wall_tension": "contact-line",
                      "free_surface_no_tension": True, "fragment_hoop": False,
                      "csf_axis_curvature": True, "csf_curvature_smoothing": 2.0,
                      "bulk_damping": 0.5, "debris_rings": 16}
@@ -271,6 +271,11 @@ class AxisymmetricFluidModule(PhysicsModule):
     # With 0.5 the field is the smooth stagnation flow's (docs/validation/droplet_impact,
     # session 27); its bulk stress is ~0.5 (h / c0) / T of the pressure of a flow changing
     # over T (0.4 % at D/dx 181 for T = 0.1 t_c), and it vanishes with h
+    # wall_tension "contact-line": the walls keep the fluid's tension (the axis corner, a thin
+    # film) except under a contact line, where the wall's suction held the foot back: with
+    # the tension everywhere the 10 m/s contact line stalled at D/dx 181 from 0.8 t_c
+    # (D_max/D 2.58); with it clipped there 3.61, and 3.70 / 3.52 / 3.24 at 64 / 90 / 128
+    # (docs/validation/droplet_impact, session 28)
     # debris_rings: free-flying clusters of at most 16 rings (no ring of them with a full
     # support) become inert (sphfem.fluid.axisymmetric_debris): a two-ring torus thrown off
     # the rim of the 10 m/s impact at D/dx 181 reached the axis at 2.58 t_c and blew up

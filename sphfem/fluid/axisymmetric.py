@@ -964,7 +964,11 @@ class AxisymmetricFluid:
         self._layer_normals = None
         #: (list, count, j, d, f') of the last list build: the pairs gradients packs
         self._pairs = None
-        if wall_friction == "layer" or wall_tension == "contact-line":
+        #: the contact-line weights are tracked (the layer's friction; the "contact-line"
+        #: wall tension where there are walls: without them there is nothing to clip)
+        self._track_contact_line = wall_friction == "layer" or (
+            wall_tension == "contact-line" and bool(wl.any()))
+        if self._track_contact_line:
             if self.wall_normals is None or not wl.any():
                 what = ("wall_friction = 'layer'" if wall_friction == "layer"
                         else "wall_tension = 'contact-line'")
@@ -1178,7 +1182,7 @@ class AxisymmetricFluid:
         #: the renormalised velocity gradient (L00, L01, L10, L11) of the real rows (a view
         #: of this evaluation's array)
         self.gradv = gradv[:n]
-        if self.wall_friction == "layer" or self.wall_tension == "contact-line":
+        if self._track_contact_line:
             self._layer_inputs(x, kind, nl, Rp, src, mtype, gradv, qh)
         if self.csf is not None:  # CSF over the fluid's widest support (adaptive_h)
             self.csf.accumulate(x, A, rho, kind, nl.offsets, nl.indices, n, src, mtype,
