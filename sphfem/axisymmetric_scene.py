@@ -459,18 +459,24 @@ class AxisymmetricFluidModule(PhysicsModule):
         st = super().checkpoint_state(ctx)
         st["_wall_layer"] = (self.solver.delta2.copy(), self.solver.fw.copy())
         st["_inert"] = np.flatnonzero(self.solver.inert)
+        ev = self.solver.debris_events
+        st["_debris_t_first"] = ev[0][0] if ev else None
         return st
 
     def restore_state(self, ctx, state: dict) -> None:
         state = dict(state)
         layer = state.pop("_wall_layer", None)
         inert = state.pop("_inert", None)
+        t_first = state.pop("_debris_t_first", None)
         super().restore_state(ctx, state)
         if layer is not None:
             self.solver.delta2[:], self.solver.fw[:] = layer
         if inert is not None and len(inert):
             self.solver.make_inert(np.asarray(inert, np.int64))
             self._inert_heat(ctx, inert)
+            # the debris found before the checkpoint, as one event at its first time
+            self.solver.debris_events = [(ctx.t if t_first is None else float(t_first),
+                                          np.asarray(inert, np.int64))]
 
     def _inert_heat(self, ctx, rows) -> None:
         """Inert rings (debris) leave the heat: k_heat = 0 (the heat module and the contact

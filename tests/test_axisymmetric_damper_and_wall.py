@@ -119,22 +119,29 @@ def test_bulk_wall_tension_clips_only_under_surface_rings():
                           FluidParams(rho0=1000.0, c0=C0), wall_tension="yes")
 
 
-def test_contact_line_wall_tension_clips_only_at_the_film_edge():
-    """``wall_tension = "contact-line"``: a film two rings thick under tension (rho < rho0)
-    on a wall; after a step the wall rows under the film's end have lost their tension and
-    those under its middle (and at the axis, where the mirrors continue the film) keep it;
-    without wall normals it is an error naming the keyword."""
-    nf, nw = 24, 34
+def _film_on_wall(nf, nw):
+    """A film two rings thick and nf long on a wall three rows deep and nw long (r from the
+    axis, lattice spacing DX): positions, kinds, the wall columns' r, wall normals, params."""
     rf = (np.arange(nf) + 0.5) * DX
     xf = np.column_stack([np.tile(rf, 2), np.repeat([0.5, 1.5], nf) * DX])
     rw = (np.arange(nw) + 0.5) * DX
     xw = np.column_stack([np.tile(rw, 3), np.repeat([-0.5, -1.5, -2.5], nw) * DX])
     x = np.vstack([xf, xw])
     kind = np.r_[np.full(len(xf), FLUID), np.full(len(xw), WALL)].astype(np.int8)
-    rho = np.where(kind == FLUID, 999.0, 1000.0)
-    M = rho * DX * DX * 2.0 * np.pi * x[:, 0]
     nrm = np.where((kind == WALL)[:, None], [0.0, 1.0], 0.0)
     pa = FluidParams(rho0=1000.0, c0=C0, mu=1e-3, delta=0.1, alpha=0.0)
+    return x, kind, rw, nrm, pa
+
+
+def test_contact_line_wall_tension_clips_only_at_the_film_edge():
+    """``wall_tension = "contact-line"``: a film two rings thick under tension (rho < rho0)
+    on a wall; after a step the wall rows under the film's end have lost their tension and
+    those under its middle (and at the axis, where the mirrors continue the film) keep it;
+    without wall normals it is an error naming the keyword."""
+    nf, nw = 24, 34
+    x, kind, rw, nrm, pa = _film_on_wall(nf, nw)
+    rho = np.where(kind == FLUID, 999.0, 1000.0)
+    M = rho * DX * DX * 2.0 * np.pi * x[:, 0]
     f = AxisymmetricFluid(x, np.zeros_like(x), rho, kind, M, DX * DX, 3 * DX, pa,
                           wall_normals=nrm, wall_tension="contact-line")
     f.step(1e-6)
@@ -161,17 +168,10 @@ def test_contact_line_slip_frees_the_film_edge_only():
     has friction factor ~0 on the rings at its end (the contact line) instead of >= 1, and the
     same factor as without the option under its middle."""
     nf, nw = 24, 34
-    rf = (np.arange(nf) + 0.5) * DX
-    xf = np.column_stack([np.tile(rf, 2), np.repeat([0.5, 1.5], nf) * DX])
-    rw = (np.arange(nw) + 0.5) * DX
-    xw = np.column_stack([np.tile(rw, 3), np.repeat([-0.5, -1.5, -2.5], nw) * DX])
-    x = np.vstack([xf, xw])
-    kind = np.r_[np.full(len(xf), FLUID), np.full(len(xw), WALL)].astype(np.int8)
+    x, kind, _, nrm, pa = _film_on_wall(nf, nw)
     rho = np.full(len(x), 1000.0)
     M = rho * DX * DX * 2.0 * np.pi * x[:, 0]
     v = np.where((kind == FLUID)[:, None], [0.01, 0.0], 0.0)
-    nrm = np.where((kind == WALL)[:, None], [0.0, 1.0], 0.0)
-    pa = FluidParams(rho0=1000.0, c0=C0, mu=1e-3, delta=0.1, alpha=0.0)
     fw = {}
     for slip in (False, True):
         f = AxisymmetricFluid(x, v, rho, kind, M, DX * DX, 3 * DX, pa, wall_normals=nrm,

@@ -141,7 +141,12 @@ def test_the_scene_module_takes_debris_out_of_the_heat_and_reports_it(short_coup
     every = sh._fluid(ps, wet_only=False)
     assert set(fm.idx[top]) <= set(every) and not set(fm.idx[top]) & set(wet)
     assert every.size == wet.size + 2
+    s.debris_events.append((1.5e-7, np.sort(top)))
     st = fm.checkpoint_state(ctx)
-    assert st["_inert"].tolist() == sorted(top.tolist())
+    assert st["_inert"].tolist() == sorted(top.tolist()) and st["_debris_t_first"] == 1.5e-7
+    # restored into the same module: the rows stay inert, the first time is kept
+    fm.restore_state(ctx, dict(st))
+    assert fm.diagnostics(ctx)["debris"]["t_first_s"] == 1.5e-7
+    assert np.flatnonzero(s.inert).tolist() == sorted(top.tolist())
     # the checkpoint written before makes no ring inert; the later one does
     assert state["_inert"].size == 0
