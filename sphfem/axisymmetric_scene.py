@@ -497,8 +497,8 @@ class AxisymmetricFluidModule(PhysicsModule):
                                     f"fluid ring {self._depth(s):.2f} dx below the wall "
                                     "top)") from None
         self._write_back(ctx)
-        if s.debris_events and s.debris_events[-1][0] == s.t:  # found at this step
-            rows = s.debris_events[-1][1]
+        if s.debris_new.size:  # found at this step
+            rows = s.debris_new
             self._inert_heat(ctx, rows)
             logger.info("axisymmetric fluid: %d ring(s) of free-flying debris made inert at "
                         "t = %g s (counted in summary.json, fluid.debris)", rows.size, s.t)

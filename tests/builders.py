@@ -130,6 +130,20 @@ def load_example(path, name: str):
     return mod
 
 
+def coupled_droplet_run(out, speed: float, per_diameter: int, t_end_tc: float):
+    """The axisymmetric droplet job (fluid, ring heat, fem-contact substrate heat,
+    fem-axisymmetric stress; ``sphfem.validation.droplet_impact.scene_at``) run into ``out``;
+    returns the finished :class:`~sphfem.simulation.Simulation`."""
+    from sphfem.scene import parse_scene
+    from sphfem.simulation import Simulation
+    from sphfem.validation import droplet_impact as di
+
+    sim = Simulation(parse_scene(di.scene_at(speed, per_diameter, t_end_tc), source="<test>"),
+                     source="<test>")
+    sim.run(out, progress=False)
+    return sim
+
+
 def as_planar_scene(d: dict) -> dict:
     """An axisymmetric scene dict (``sphfem.validation.droplet_impact.scene_at``) turned into
     the planar (x, y) scene of its (r, z) section: geometry cartesian, the domain and the

@@ -108,14 +108,9 @@ def test_debris_rings_bad_values():
 def short_coupled_run(tmp_path_factory):
     """The droplet job (fluid, ring heat, fem-contact substrate heat, fem-axisymmetric
     stress) at D/dx 16 to 0.05 t_c."""
-    from sphfem.scene import parse_scene
-    from sphfem.simulation import Simulation
-    from sphfem.validation import droplet_impact as di
+    from builders import coupled_droplet_run
 
-    out = tmp_path_factory.mktemp("debris")
-    sim = Simulation(parse_scene(di.scene_at(10, 16, 0.05), source="<test>"), source="<test>")
-    sim.run(out, progress=False)
-    return sim
+    return coupled_droplet_run(tmp_path_factory.mktemp("debris"), 10, 16, 0.05)
 
 
 def test_the_scene_module_takes_debris_out_of_the_heat_and_reports_it(short_coupled_run):

@@ -58,14 +58,10 @@ def test_a_replaced_list_is_pickled_again():
 def coupled_run(tmp_path_factory):
     """The droplet job (fluid, ring heat, fem-contact substrate heat, fem-axisymmetric
     stress) at D/dx 16 to 0.3 t_c."""
-    from sphfem.scene import parse_scene
-    from sphfem.simulation import Simulation
-    from sphfem.validation import droplet_impact as di
+    from builders import coupled_droplet_run
 
     out = tmp_path_factory.mktemp("coupled")
-    sim = Simulation(parse_scene(di.scene_at(10, 16, 0.3), source="<test>"), source="<test>")
-    sim.run(out, progress=False)
-    return sim, out
+    return coupled_droplet_run(out, 10, 16, 0.3), out
 
 
 def test_coupling_state_restores_the_records_exactly(coupled_run, tmp_path):

@@ -899,6 +899,8 @@ class AxisymmetricFluid:
         self.inert = np.zeros(n, bool)
         #: (t [s], rows) of each debris detection that found some
         self.debris_events: list[tuple[float, np.ndarray]] = []
+        #: the rows made inert by the last step (empty: none)
+        self.debris_new = np.zeros(0, np.int64)
         #: True: rings at or next to the free surface (lambda < 0.75) keep rho >= rho0
         self.free_surface_no_tension = bool(free_surface_no_tension)
         #: particle shifting coefficient A of dr = -A h |v| dt grad C (0: off)
@@ -1221,8 +1223,9 @@ class AxisymmetricFluid:
         band = np.zeros(n, np.int8)
         band_normals(x, kind, nl.offsets, nl.indices, Rp, nrm, self.kcode, n, bn, band)
         a = np.zeros(n)
-        hoop = qh[:n] if not self.planar else np.zeros(n)
-        surface_divergence(gradv[:n], np.ascontiguousarray(hoop), bn, band, a)
+        if self.wall_friction == "layer":  # eq. (2)'s strain rate (not the contact line's)
+            hoop = qh[:n] if not self.planar else np.zeros(n)
+            surface_divergence(gradv[:n], np.ascontiguousarray(hoop), bn, band, a)
         self._layer = (band, a, x, nl, Rp, bn, kind)
 
     def _advance_layer(self, dt: float) -> None:
@@ -1318,8 +1321,8 @@ class AxisymmetricFluid:
             self._fly_inert(dt)
         self.t += dt
         self.step_count += 1
-        if self.debris_rings and self.step_count % self.DEBRIS_EVERY == 0:
-            self.find_debris()
+        self.debris_new = (self.find_debris() if self.debris_rings
+                           and self.step_count % self.DEBRIS_EVERY == 0 else self.debris_new[:0])
         if not _all_finite(fi, self.x, self.rho):
             raise FloatingPointError(f"axisymmetric fluid: non-finite state at step "
                                      f"{self.step_count}, t = {self.t:.4g} s")
