@@ -105,6 +105,24 @@ def test_convergence_script_reads_levels_from_an_earlier_json(tmp_path, capsys):
                    "--t-end-tc", "4", "--figures-from", str(src)])
 
 
+    # the ensembles a --members run writes are read back member by member: the criteria of
+    # the second pass are those of the file's level means
+    res["member_figures"] = [{"0": f, "1": dict(f, spread=1.02 * f["spread"])} for f in figs]
+    src2 = tmp_path / "ensembles.json"
+    src2.write_text(json.dumps(res))
+    out2 = tmp_path / "out2"
+    conv.main(["10", "--out", str(out2), "--levels", *map(str, levels), "--t-end-tc", "4",
+               "--members", "2", "--figures-from", str(src2)])
+    printed = capsys.readouterr().out
+    assert printed.count("figures from") == 6 and "pooled sd" in printed
+    res2 = json.loads((out2 / "convergence_V10.json").read_text())
+    means = [di.ensemble([f, dict(f, spread=1.02 * f["spread"])]) for f in figs]
+    crit, _ = di.speed_criteria(10.0, levels, means)
+    assert res2["criteria"]["10 m/s spread converged"]["value"] == pytest.approx(
+        crit["10 m/s spread converged"].value)
+    with pytest.raises(SystemExit):
+        conv.main(["10", "--out", str(out2), "--members", "2", "--member", "2"])
+
 
 def test_convergence_script_runs_one_level_without_criteria(tmp_path, capsys):
     """convergence.py --levels N (one machine per level): the level's figures are printed,
@@ -122,7 +140,7 @@ def test_convergence_script_runs_one_level_without_criteria(tmp_path, capsys):
     assert conv.main(["10", "--out", str(out), "--levels", "90", "--t-end-tc", "4",
                       "--figures-from", str(src)]) == 0
     printed = capsys.readouterr().out
-    assert "D/dx 90: spread" in printed and "the criteria need three" in printed
+    assert "D/dx 90 member 0: spread" in printed and "the criteria need three" in printed
     assert "PASS" not in printed and "FAIL" not in printed
     assert not (out / "convergence_V10.json").exists()
     with pytest.raises(SystemExit):
@@ -208,3 +226,78 @@ def test_lamella_at_the_axis_is_compared_with_the_inviscid_law():
     assert math.isnan(h["lamella_ratio"])
     crit, _ = di.speed_criteria(10.0, (64, 90, 128), [f, f, h])
     assert not crit["10 m/s lamella"].passed
+
+
+def _members(levels, speed, C, rel_scatter):
+    """Three members per level: the manufactured figures times (1 - s, 1, 1 + s)."""
+    out = []
+    for f in manufactured(levels, speed, C):
+        ms = []
+        for e in (-rel_scatter, 0.0, rel_scatter):
+            g = dict(f)
+            g.update({k: f[k] * (1.0 + e) for k in di.FIGURES})
+            ms.append(g)
+        out.append(ms)
+    return out
+
+
+def test_ensemble_means_worst_gates_and_sample_deviation():
+    levels = (64, 90, 128)
+    (m0, m1, m2), *_ = _members(levels, 10.0, 2.0, 0.05)
+    m2 = dict(m2, balance=3e-12, T_impact_dev=0.07, wall_s=5.0)
+    m0, m1 = dict(m0, wall_s=1.0), dict(m1, wall_s=2.0)
+    e = di.ensemble([m0, m1, m2])
+    assert e["members"] == 3
+    assert e["spread"] == pytest.approx(m1["spread"])  # the mean of 1 -+ 0.05
+    assert e["spread_sd"] == pytest.approx(0.05 * m1["spread"])  # sample sd of (-s, 0, s)
+    assert e["spread_members"] == [m0["spread"], m1["spread"], m2["spread"]]
+    assert e["balance"] == 3e-12 and e["T_impact_dev"] == 0.07  # the worst member's
+    assert e["wall_s"] == 8.0  # the ensemble's cost
+    one = di.ensemble([m1])
+    assert one["members"] == 1 and one["heat_sd"] == 0.0 and one["heat"] == m1["heat"]
+    with pytest.raises(ValueError, match="at least one member"):
+        di.ensemble([])
+
+
+def test_ensemble_uncertainty_pools_the_levels():
+    """3 levels x 3 members: 6 degrees of freedom (t_95 = 2.447), se = s_p / sqrt(3) with
+    s_p^2 the mean of the levels' variances; single runs: no scatter measured."""
+    figs = [di.ensemble(ms) for ms in _members((64, 90, 128), 10.0, 2.0, 0.05)]
+    se, t95, dof = di.ensemble_uncertainty(figs, "heat")
+    assert dof == 6 and t95 == pytest.approx(2.4469, abs=1e-4)
+    sp = math.sqrt(sum(f["heat_sd"] ** 2 for f in figs) / 3)
+    assert se == pytest.approx([sp / math.sqrt(3)] * 3)
+    single = [di.ensemble([ms[1]]) for ms in _members((64, 90, 128), 10.0, 2.0, 0.05)]
+    assert di.ensemble_uncertainty(single, "heat") == ([0.0] * 3, 0.0, 0)
+
+
+def test_speed_criteria_count_the_ensembles_sampling_uncertainty():
+    """The converged sequence of the test above (C = 2) passes with a 0.5 % member scatter
+    and fails with 8 % (the means' 95 % interval alone exceeds 10 %); without scatter the
+    ensemble's criteria have the single runs' values."""
+    levels = (64, 90, 128)
+    base, _ = di.speed_criteria(10.0, levels, manufactured(levels, 10.0, 2.0))
+    for s, ok in ((0.0, True), (0.005, True), (0.08, False)):
+        figs = [di.ensemble(ms) for ms in _members(levels, 10.0, 2.0, s)]
+        crit, notes = di.speed_criteria(10.0, levels, figs)
+        for key in di.FIGURES:
+            c = crit[f"10 m/s {key} converged"]
+            assert c.passed is ok, (s, key, c.value)
+            if s == 0.0:
+                assert c.value == pytest.approx(base[f"10 m/s {key} converged"].value)
+            else:
+                assert c.value > base[f"10 m/s {key} converged"].value
+                assert "sampling uncertainty" in c.description
+        assert any("members [3, 3, 3], pooled sd" in x for x in notes)
+
+
+def test_scene_members_jitter_the_droplet_only():
+    d0 = di.scene_at(10.0, 16, 0.5)
+    d2 = di.scene_at(10.0, 16, 0.5, member=2)
+    drop0 = next(b for b in d0["blocks"] if b["kind"] == "fluid")
+    drop2 = next(b for b in d2["blocks"] if b["kind"] == "fluid")
+    assert drop2["jitter"] == di.ENSEMBLE_JITTER and d2["scene"]["seed"] == 2
+    assert drop0.get("jitter", 0.0) == 0.0
+    assert d0["output"]["every"] == d2["output"]["every"] == f"{di.OUTPUT_EVERY_TC:g} tc"
+    with pytest.raises(ValueError, match="member must be >= 0"):
+        di.scene_at(10.0, 16, 0.5, member=-1)

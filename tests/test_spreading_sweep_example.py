@@ -10,6 +10,7 @@ from pathlib import Path
 import pytest
 
 from sphfem.scene import parse_scene
+from sphfem.validation import droplet_impact as di
 
 PATH = Path(__file__).resolve().parents[1] / "examples" / "droplet_impact" / \
     "spreading_axisymmetric.py"
@@ -81,7 +82,7 @@ def test_ensemble_members_jitter_the_droplet_and_the_report_tabulates_them(study
     drop0 = next(b for b in d0["blocks"] if b["kind"] == "fluid")
     drop2 = next(b for b in d2["blocks"] if b["kind"] == "fluid")
     assert drop0.get("jitter", 0.0) == 0.0
-    assert drop2["jitter"] == study.ENSEMBLE_JITTER and d2["scene"]["seed"] == 2
+    assert drop2["jitter"] == di.ENSEMBLE_JITTER and d2["scene"]["seed"] == 2
     parse_scene(d2)
     band = {"a": 2.0, "b": 2.5}
     recs = [{"We": 30.0, "Re": 1000.0, "n": 61, "member": k, "refined": False,

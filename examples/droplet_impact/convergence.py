@@ -1,7 +1,9 @@
 """One impact speed of the ``droplet-impact`` validation, run level by level and resumable.
 
     python examples/droplet_impact/convergence.py SPEED --out DIR [--levels N N N ...]
+                                                  [--members K] [--member M ...]
                                                   [--t-end-tc T] [--figures-from JSON ...]
+                                                  [--prune]
 
 Runs the validation's scene (:func:`sphfem.validation.droplet_impact.scene_at`) at SPEED
 [m/s] and each level N (particles across the droplet; default: the case's own three,
@@ -14,6 +16,17 @@ this speed (:func:`~sphfem.validation.droplet_impact.speed_criteria`, from all t
 given), and writes ``DIR/convergence_V{SPEED}.json`` and a figure ``.png``: the four
 figures against dx with the Richardson limit and its error bar, and the spread against
 the band of the published correlations.
+
+``--members K`` runs an ensemble of K members per level (:func:`~sphfem.validation.
+droplet_impact.scene_at`'s ``member``: member 0 the scene as it is, in ``V{SPEED}_n{N}``,
+member k > 0 the droplet jittered by 1e-3 dx with seed k, in ``V{SPEED}_n{N}_m{k}``); the
+criteria then take the level means and their sampling uncertainty
+(:func:`~sphfem.validation.droplet_impact.ensemble`).  ``--member M`` (repeatable) runs only
+those members, reading the others' completed folders: two processes with different members
+share the two cores of a machine (``NUMBA_NUM_THREADS=1`` each); the criteria are printed
+from the members completed so far, with their counts.  ``--prune`` deletes a completed
+run's particle and substrate VTU series (the checkpoint and ``summary.json`` stay; a D/dx
+181 level writes ~10 GB).
 
 ``--figures-from`` takes the figures of levels run elsewhere (another machine, an earlier
 session whose run folders are gone) from an earlier ``convergence_V{SPEED}.json``: a level
@@ -47,25 +60,44 @@ def completed(folder: Path, speed: float, t_end_tc: float) -> dict | None:
     return None
 
 
-def earlier_figures(paths, speed: float, t_end_tc: float) -> dict[int, tuple[dict, str]]:
-    """Level -> (figures, file) from earlier ``convergence_V*.json`` files of the same speed
-    and end time (a later file wins); a file of another speed or end time is an error."""
-    out: dict[int, tuple[dict, str]] = {}
+def earlier_figures(paths, speed: float, t_end_tc: float) -> dict[tuple, tuple[dict, str]]:
+    """(level, member) -> (figures, file) from earlier ``convergence_V*.json`` files of the
+    same speed and end time (a later file wins; a file without ``member_figures`` holds
+    member 0's); a file of another speed or end time is an error."""
+    out: dict[tuple, tuple[dict, str]] = {}
     for path in paths:
         d = json.loads(Path(path).read_text())
         if not math.isclose(float(d["speed"]), speed):
             raise SystemExit(f"--figures-from {path}: speed {d['speed']} m/s, not {speed:g}")
-        for n, f in zip(d["levels"], d["figures"], strict=True):
-            t_tc = f["t_end"] / f["tc"]
-            if abs(t_tc - t_end_tc) > 1e-6 * t_end_tc:
-                raise SystemExit(f"--figures-from {path}: D/dx {n} ended at {t_tc:.4g} t_c, "
-                                 f"not {t_end_tc:g}")
-            out[int(n)] = (f, str(path))
+        per_level = d.get("member_figures") or [{"0": f} for f in d["figures"]]
+        for n, members in zip(d["levels"], per_level, strict=True):
+            for m, f in members.items():
+                t_tc = f["t_end"] / f["tc"]
+                if abs(t_tc - t_end_tc) > 1e-6 * t_end_tc:
+                    raise SystemExit(f"--figures-from {path}: D/dx {n} ended at {t_tc:.4g} "
+                                     f"t_c, not {t_end_tc:g}")
+                out[int(n), int(m)] = (f, str(path))
     return out
 
 
-def run_level(speed: float, n: int, t_end_tc: float, folder: Path) -> dict:
-    """The summary of one level, run (or continued) when it has not completed."""
+def member_folder(out: Path, speed: float, n: int, member: int) -> Path:
+    """The run folder of ``member`` of level ``n`` (module docstring)."""
+    return out / (f"V{speed:g}_n{n}" + (f"_m{member}" if member else ""))
+
+
+def prune(folder: Path) -> int:
+    """Delete the VTU series of a completed run in ``folder``; returns the bytes freed."""
+    freed = 0
+    for f in [*folder.glob("*.vtu"), *folder.glob("*.pvd"), *folder.glob("*/*.vtu"),
+              *folder.glob("*/*.pvd")]:
+        freed += f.stat().st_size
+        f.unlink()
+    return freed
+
+
+def run_level(speed: float, n: int, t_end_tc: float, folder: Path, member: int = 0) -> dict:
+    """The summary of one level's ensemble ``member``, run (or continued) when it has not
+    completed."""
     from sphfem.api import run
     from sphfem.scene import parse_scene
     from sphfem.validation import droplet_impact as di
@@ -73,22 +105,24 @@ def run_level(speed: float, n: int, t_end_tc: float, folder: Path) -> dict:
     s = completed(folder, speed, t_end_tc)
     if s is not None:
         return s
-    d = di.scene_at(speed, n, t_end_tc)
-    d["output"]["every"] = "0.1 tc"
-    scene = parse_scene(d, source=f"convergence V={speed:g} D/dx={n}")
+    d = di.scene_at(speed, n, t_end_tc, member=member)
+    scene = parse_scene(d, source=f"convergence V={speed:g} D/dx={n} member {member}")
     resume = (folder / "checkpoint.npz").exists()
     # the checkpoint is kept, so a later, longer --t-end-tc continues the level
     run(scene, folder, resume=resume, overwrite=not resume, keep_checkpoint=True)
     return json.loads((folder / "summary.json").read_text())
 
 
-def plot(path: Path, speed: float, levels, figs: list[dict]) -> None:
-    """The four figures against dx (with their Richardson limits) and the spread band."""
+def plot(path: Path, speed: float, levels, figs: list[dict], member_figs=None) -> None:
+    """The four figures against dx (with their Richardson limits) and the spread band;
+    with ensembles (``member_figs``: per level, member -> figures) the members as dots and
+    the means with their 95 % sampling interval."""
     import matplotlib
 
     matplotlib.use("Agg")
     import matplotlib.pyplot as plt
 
+    from sphfem.validation import droplet_impact as di
     from sphfem.validation.droplet_impact import FIGURES
     from sphfem.validation.richardson import richardson
 
@@ -100,7 +134,15 @@ def plot(path: Path, speed: float, levels, figs: list[dict]) -> None:
     fig, axs = plt.subplots(1, 4, figsize=(16, 3.6))
     for ax, key in zip(axs, FIGURES, strict=True):
         y = [f[key] * scale[key] for f in figs]
-        ax.plot(h, y, "o-", label="SPH-FEM")
+        se, t95, dof = di.ensemble_uncertainty(figs, key)
+        if dof:
+            for hi, g in zip(h, member_figs, strict=True):
+                ax.plot([hi] * len(g), [f[key] * scale[key] for f in g.values()], ".",
+                        color="0.5", ms=4)
+            ax.errorbar(h, y, yerr=[t95 * e * scale[key] for e in se], fmt="o-", capsize=3,
+                        label="SPH-FEM ensemble means (95 %)")
+        else:
+            ax.plot(h, y, "o-", label="SPH-FEM")
         if len(levels) >= 3:
             est = richardson(h, y)
             ax.axhline(est.value, color="k", lw=0.8, label="Richardson limit")
@@ -125,11 +167,17 @@ def main(argv=None) -> int:
     ap.add_argument("--out", type=Path, required=True)
     ap.add_argument("--levels", type=int, nargs="+", default=None,
                     help="particles across the droplet, coarse to fine (default: the case's)")
+    ap.add_argument("--members", type=int, default=1,
+                    help="ensemble members per level (default 1: the scene as it is)")
+    ap.add_argument("--member", type=int, action="append", default=[],
+                    help="run only this member (repeatable); the others are read")
     ap.add_argument("--t-end-tc", type=float, default=None,
                     help="end time in t_c (default: the case's, di.t_end_for)")
     ap.add_argument("--figures-from", type=Path, nargs="+", default=[],
-                    help="earlier convergence_V*.json files: levels without a completed "
+                    help="earlier convergence_V*.json files: members without a completed "
                          "folder in --out take their figures from these")
+    ap.add_argument("--prune", action="store_true",
+                    help="delete a completed run's VTU series (summary and checkpoint stay)")
     a = ap.parse_args(argv)
 
     from sphfem.output import write_json
@@ -140,27 +188,48 @@ def main(argv=None) -> int:
     levels = sorted(a.levels) if a.levels else list(di.levels_for(a.speed))
     if levels[0] <= 0:
         ap.error(f"--levels must be positive, got {levels}")
+    if a.members < 1:
+        ap.error(f"--members must be >= 1, got {a.members}")
+    if any(not 0 <= m < a.members for m in a.member):
+        ap.error(f"--member must lie in [0, {a.members}) (--members {a.members}), "
+                 f"got {a.member}")
     t_end = a.t_end_tc or di.t_end_for(a.speed)
     a.out.mkdir(parents=True, exist_ok=True)
     earlier = earlier_figures(a.figures_from, a.speed, t_end)
-    figs = []
+    figs, member_figs = [], []
     for n in levels:
-        folder = a.out / f"V{a.speed:g}_n{n}"
-        if n in earlier and not completed(folder, a.speed, t_end):
-            f, origin = earlier[n]
-            print(f"D/dx {n}: figures from {origin}")
-        else:
-            s = run_level(a.speed, n, t_end, folder)
-            f = di.figures(s, a.speed, 2.0 * next(
-                b for b in s["scene"]["blocks"] if b["kind"] == "fluid")["radius"])
-        figs.append(f)
-        print(f"D/dx {n}: spread {f['spread']:.3f} heat {f['heat'] * 1e6:.2f} uJ rise "
-              f"{f['T_impact']:.2f} K vM {f['vm_peak'] / 1e6:.2f} MPa ({f['wall_s']:.0f} s)",
-              flush=True)
-    if len(levels) < 3:
-        print(f"{len(levels)} level(s): run and read; the criteria need three "
-              "(run again with all three --levels, completed folders are read)")
+        got: dict[int, dict] = {}
+        for m in range(a.members):
+            folder = member_folder(a.out, a.speed, n, m)
+            s = completed(folder, a.speed, t_end)
+            if s is None and (n, m) in earlier:
+                f, origin = earlier[n, m]
+                print(f"D/dx {n} member {m}: figures from {origin}")
+            elif s is None and a.member and m not in a.member:
+                continue  # another process's member, not completed yet
+            else:
+                s = s or run_level(a.speed, n, t_end, folder, m)
+                f = di.figures(s, a.speed, 2.0 * next(
+                    b for b in s["scene"]["blocks"] if b["kind"] == "fluid")["radius"])
+                if a.prune:
+                    freed = prune(folder)
+                    if freed:
+                        print(f"D/dx {n} member {m}: pruned {freed / 1e9:.2f} GB of VTU")
+            got[m] = f
+            print(f"D/dx {n} member {m}: spread {f['spread']:.3f} heat {f['heat'] * 1e6:.2f} "
+                  f"uJ rise {f['T_impact']:.2f} K vM {f['vm_peak'] / 1e6:.2f} MPa "
+                  f"({f['wall_s']:.0f} s)", flush=True)
+        member_figs.append(got)
+        if got:
+            figs.append(di.ensemble([got[m] for m in sorted(got)]))
+    if len(levels) < 3 or len(figs) < len(levels):
+        print(f"{len(figs)} of {len(levels)} level(s) with a completed member: the criteria "
+              "need three (run again when they have completed; completed folders are read)")
         return 0
+    counts = [len(g) for g in member_figs]
+    if any(c < a.members for c in counts):
+        print(f"members completed per level {counts} of {a.members}: the criteria below are "
+              "from those")
     crit, notes = di.speed_criteria(a.speed, levels, figs)
     for name, c in crit.items():
         print(f"[{'PASS' if c.passed else 'FAIL'}] {name}: {c.value:.4g} {c.op} {c.limit:g}")
@@ -168,17 +237,25 @@ def main(argv=None) -> int:
         print("note:", x)
 
     def clean(v):
-        return None if isinstance(v, float) and not math.isfinite(v) else v
+        if isinstance(v, (list, tuple)):
+            return [clean(x) for x in v]
+        if isinstance(v, (int, float)) and not isinstance(v, bool):
+            v = float(v)
+            return v if math.isfinite(v) else None
+        return v
+
+    def cleaned(f):
+        return {k: clean(v) for k, v in f.items()}
 
     write_json(a.out / f"convergence_V{a.speed:g}.json", {
-        "speed": a.speed, "levels": levels,
-        "figures": [{k: clean(float(v)) if isinstance(v, (int, float)) else v
-                     for k, v in f.items()} for f in figs],
+        "speed": a.speed, "levels": levels, "members": a.members,
+        "figures": [cleaned(f) for f in figs],
+        "member_figures": [{str(m): cleaned(f) for m, f in g.items()} for g in member_figs],
         "criteria": {k: {"value": clean(float(c.value)), "limit": c.limit, "op": c.op,
                          "passed": bool(c.passed), "description": c.description}
                      for k, c in crit.items()},
         "notes": notes})
-    plot(a.out / f"convergence_V{a.speed:g}.png", a.speed, levels, figs)
+    plot(a.out / f"convergence_V{a.speed:g}.png", a.speed, levels, figs, member_figs)
     return 0 if all(c.passed for c in crit.values()) else 1
 
 

@@ -3,7 +3,8 @@ wall-friction study in docs/validation/droplet_impact/README.md, session 9).
 
     python examples/droplet_impact/level_run.py V N T_END_TC OUT [--wall-radius R] [--resume]
                                                 [--fluid-only] [--every TC]
-                                                [--fluid-option KEY=VALUE ...] [key=value ...]
+                                                [--fluid-option KEY=VALUE ...] [--member K]
+                                                [key=value ...]
 
 V the impact speed [m/s] (c0 = 10 V), N particles across the droplet, T_END_TC the end time in
 t_c = D / V; ``--wall-radius`` widens the SPH wall, the domain and the lateral heat refinement
@@ -13,12 +14,15 @@ checkpoint when there is one (the run writes one at every output and keeps the l
 completed level can be continued to a later T_END_TC; without the flag an existing OUT is
 overwritten); ``--fluid-only`` runs the fluid alone (no heat, no substrate: the cheap way to
 look at the flow, e.g. the axis frames of ``axis_frames.py``); ``--every`` writes the
-particles every TC t_c (default T_END_TC / 4); ``--fluid-option KEY=VALUE`` (repeatable)
+particles every TC t_c (default the validation's 0.1; the steps do not land on the output
+times, so the interval does not change the run); ``--fluid-option KEY=VALUE`` (repeatable)
 overrides one of the axisymmetric fluid's treatment keywords
 (:attr:`sphfem.axisymmetric_scene.AxisymmetricFluidModule.fluid_options`, e.g.
 ``wall_tension=False``, or any other keyword of
 :class:`sphfem.fluid.axisymmetric.AxisymmetricFluid`; the value a Python literal) for this
-run only.  Prints the validation's figures of the run
+run only; ``--member K`` runs the validation's ensemble member K (the droplet jittered by
+1e-3 dx with seed K, :func:`sphfem.validation.droplet_impact.scene_at`).  Prints the
+validation's figures of the run
 (:func:`sphfem.validation.droplet_impact.figures`; with ``--fluid-only`` the summary's fluid
 figures).
 """
@@ -47,6 +51,8 @@ def main(argv=None) -> None:
     ap.add_argument("--every", type=float, default=None, help="output interval [t_c]")
     ap.add_argument("--fluid-option", action="append", default=[], metavar="KEY=VALUE",
                     help="an AxisymmetricFluidModule.fluid_options keyword for this run")
+    ap.add_argument("--member", type=int, default=0,
+                    help="the validation's ensemble member (0: the scene as it is)")
     ap.add_argument("overrides", nargs="*", help="section.key=value")
     a = ap.parse_intermixed_args(argv)
 
@@ -75,8 +81,10 @@ def main(argv=None) -> None:
     from sphfem.scene import parse_scene
     from sphfem.validation import droplet_impact as di
 
+    if a.member < 0:
+        ap.error(f"--member must be >= 0, got {a.member}")
     d = di.scene_at(a.speed, a.per_diameter, a.t_end_tc, wall_radius=a.wall_radius,
-                    overrides=a.overrides)
+                    overrides=a.overrides, member=a.member)
     if a.fluid_only:
         d["physics"]["modules"] = ["fluid"]
         for key in ("heat", "coupling"):

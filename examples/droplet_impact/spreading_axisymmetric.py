@@ -54,24 +54,17 @@ def particles_across(Re: float, min_n: int, refine: bool = False) -> int:
     return math.ceil(n * math.sqrt(2.0)) if refine else n
 
 
-#: the ensemble's members k > 0 move every droplet ring by up to this many dx at random
-#: (the block's ``jitter`` with scene seed k): a perturbation far below the spacing
-ENSEMBLE_JITTER = 1e-3
-
-
 def scene_for(We: float, Re: float, n: int, t_end_tc: float, overrides=(),
               member: int = 0) -> dict:
     """The fluid-only axisymmetric droplet scene at (We, Re) with n particles across;
     ``overrides``: ``"section.key=value"`` strings applied last
     (:func:`sphfem.validation.droplet_impact.scene_at`); ``member`` k > 0: the droplet's
-    rings jittered by up to :data:`ENSEMBLE_JITTER` dx with seed k (an ensemble member)."""
+    rings jittered by up to :data:`~sphfem.validation.droplet_impact.ENSEMBLE_JITTER` dx
+    with seed k (an ensemble member)."""
     from sphfem.validation import droplet_impact as di
 
-    d = di.scene_at(SPEED, n, t_end_tc)
+    d = di.scene_at(SPEED, n, t_end_tc, member=member)
     drop = next(b for b in d["blocks"] if b["kind"] == "fluid")
-    if member:
-        drop["jitter"] = ENSEMBLE_JITTER
-        d["scene"]["seed"] = int(member)
     mat = d["materials"][drop["material"]]
     D, rho = 2.0 * drop["radius"], mat["rho0"]
     mat["mu"] = rho * SPEED * D / Re
@@ -80,9 +73,6 @@ def scene_for(We: float, Re: float, n: int, t_end_tc: float, overrides=(),
     for section in ("coupling", "heat"):
         d.pop(section, None)
     d["output"]["every"] = f"{t_end_tc / 4} tc"
-    # the step is not shortened to land on output times: the frame rate (--set
-    # output.every=...) does not perturb the run (the late spreading is sensitive to that)
-    d["output"]["exact_times"] = False
     d["scene"]["name"] = f"spreading_We{We:g}_Re{Re:g}_n{n}"
     d["scene"]["description"] = f"fluid-only droplet impact at We = {We:g}, Re = {Re:g}"
     return di.apply_overrides(d, overrides)

@@ -26,7 +26,15 @@ Each figure gets an observed order, a Richardson limit and a GCI error bar
 
 * converged: the finest level lies within 10 % of the Richardson limit, the error bar
   included (|f_h - f_0| + GCI |f_h| <= 0.1 |f_0|); an oscillatory or diverging sequence
-  gets a 3x-spread error bar and fails unless the spread is small;
+  gets a 3x-spread error bar and fails unless the spread is small.  The spread and the heat
+  are chaotic: a perturbation of 1e-3 dx moves one run's by ~5 % (the rim's breakup, the
+  contact line's pauses), so single runs cannot show them converged to 10 %.  The full case
+  therefore runs an ensemble per level (:data:`MEMBERS_FULL` members, :func:`scene_at`'s
+  ``member``: the droplet jittered by :data:`ENSEMBLE_JITTER` dx with seed k), takes the
+  Richardson estimate of the level means (:func:`ensemble`) and adds the means' sampling
+  uncertainty to the distance: u = t_95 se (1 + q, q) propagated through f_0 = f_3 +
+  q (f_3 - f_2), q = 1 / (r^p - 1), se from the scatter pooled over the levels
+  (:func:`ensemble_uncertainty`);
 * contact temperature: at the finest level the impact-point rise stays within 10 % of the
   rise of the strained contact (:mod:`sphfem.heat.strained_contact`: the 1D stagnation-line
   layer w = -a z on the conducting substrate, solved by finite volumes, independent of the
@@ -87,6 +95,17 @@ LEVELS_QUICK = (16, 20, 24)
 #: (D/dx 128) while at 50 m/s the spread still grows at 3.9 t_c (D/dx 64))
 T_END_FULL = {10.0: 4.0, 30.0: 6.0, 50.0: 6.0}
 T_END_QUICK = 0.6
+#: output interval of the case's runs [t_c]; the step is not shortened to land on the output
+#: times (``output.exact_times = false``), so a run does not depend on it
+OUTPUT_EVERY_TC = 0.1
+#: an ensemble's members k > 0 move every droplet ring by up to this many dx at random (the
+#: fluid block's ``jitter`` with scene seed k): a perturbation far below the spacing that
+#: samples the run-to-run scatter of the chaotic figures (the spread and the heat)
+ENSEMBLE_JITTER = 1e-3
+#: ensemble members per level of the full case (the quick case runs one)
+MEMBERS_FULL = 3
+#: figures an ensemble reports by its members' worst value, not their mean (gates of each run)
+ENSEMBLE_WORST = ("balance", "T_impact_dev", "T_impact_static", "spread_t_tc")
 
 
 def t_end_for(speed: float) -> float:
@@ -144,12 +163,14 @@ def levels_for(speed: float, scene=None) -> tuple[int, int, int]:
 
 
 def scene_at(speed: float, per_diameter: int, t_end_tc: float, *,
-             wall_radius: float | None = None, overrides=()) -> dict:
+             wall_radius: float | None = None, overrides=(), member: int = 0) -> dict:
     """The scene dict at impact speed ``speed`` (c0 = 10 speed), ``per_diameter``
     particles across the droplet, ending at ``t_end_tc`` t_c.  ``wall_radius`` [m] widens
     the SPH wall, the domain and the lateral heat refinement to that radius;
     ``overrides``: ``"section.key=value"`` strings (the value a Python literal, else the
-    text), applied last, e.g. ``"fluid.wall_friction=sph"``."""
+    text), applied last, e.g. ``"fluid.wall_friction=sph"``; ``member`` k > 0: an
+    ensemble's member, the droplet's rings jittered by up to :data:`ENSEMBLE_JITTER` dx with
+    scene seed k (member 0 is the scene as it is)."""
     from sphfem.resolution import scaled_resolution
 
     sc = base_scene()
@@ -162,7 +183,15 @@ def scene_at(speed: float, per_diameter: int, t_end_tc: float, *,
     drop["velocity"] = v
     d["materials"][drop["material"]]["c0"] = 10.0 * float(speed)
     d["time"]["t_end"] = f"{t_end_tc} tc"
-    d["output"]["every"] = f"{t_end_tc / 4} tc"
+    d["output"]["every"] = f"{OUTPUT_EVERY_TC:g} tc"
+    # the late spreading is chaotic: landing the steps on the output times would make the
+    # output interval a perturbation of the run
+    d["output"]["exact_times"] = False
+    if member < 0:
+        raise ValueError(f"droplet-impact: ensemble member must be >= 0, got {member}")
+    if member:
+        drop["jitter"] = ENSEMBLE_JITTER
+        d["scene"]["seed"] = int(member)
     d["scene"]["name"] = f"droplet_impact_axi_V{speed:g}_D{per_diameter}"
     d["scene"]["description"] = (f"the packaged axisymmetric droplet scene at {speed:g} m/s, "
                                  f"D/dx = {per_diameter}, to {t_end_tc:g} tc")
@@ -286,6 +315,51 @@ def figures(summary: dict, speed: float, diameter: float) -> dict:
     }
 
 
+def ensemble(members: list[dict]) -> dict:
+    """One level's figures from those of its ensemble members (:func:`figures` of each run,
+    :func:`scene_at`'s ``member``): the members' mean of every number, their worst (largest)
+    of :data:`ENSEMBLE_WORST`, the sum of their wall seconds, other values from the first
+    member; for each of :data:`FIGURES` the members' values ``{key}_members`` and sample
+    standard deviation ``{key}_sd`` (0 for one member); ``members`` their count."""
+    if not members:
+        raise ValueError("droplet-impact: an ensemble needs at least one member")
+    k = len(members)
+    out = dict(members[0])
+    for key, v in members[0].items():
+        if isinstance(v, bool) or not isinstance(v, (int, float)):
+            continue
+        vals = [float(m[key]) for m in members]
+        out[key] = (max(vals) if key in ENSEMBLE_WORST else sum(vals) if key == "wall_s"
+                    else sum(vals) / k)
+    for key in FIGURES:
+        vals = [float(m[key]) for m in members]
+        mean = sum(vals) / k
+        out[f"{key}_members"] = vals
+        out[f"{key}_sd"] = (math.sqrt(sum((v - mean) ** 2 for v in vals) / (k - 1))
+                            if k > 1 else 0.0)
+    out["members"] = k
+    return out
+
+
+def ensemble_uncertainty(figs: list[dict], key: str) -> tuple[list[float], float, int]:
+    """The standard errors of the level means of ``key`` (``figs``: :func:`ensemble` of each
+    level) and the Student t factor of their two-sided 95 % interval.  The run-to-run
+    scatter is taken as the same at every level and pooled, s_p^2 = sum_i (K_i - 1) s_i^2 /
+    sum_i (K_i - 1) (three members alone give 2 degrees of freedom, t = 4.3), so se_i =
+    s_p / sqrt(K_i) and t at sum_i (K_i - 1) degrees of freedom; ([0, ...], 0, 0) when no
+    level has more than one member (single runs: no scatter measured)."""
+    from scipy.stats import t as student_t
+
+    ks = [int(f.get("members", 1)) for f in figs]
+    dof = sum(k - 1 for k in ks)
+    if dof == 0:
+        return [0.0] * len(figs), 0.0, 0
+    var = sum((k - 1) * float(f.get(f"{key}_sd", 0.0)) ** 2
+              for k, f in zip(ks, figs, strict=True)) / dof
+    sp = math.sqrt(var)
+    return [sp / math.sqrt(k) for k in ks], float(student_t.ppf(0.975, dof)), dof
+
+
 def strained_reference(summary: dict, t_contact: float, window: list[dict]):
     """The strained-contact rise [K] (:func:`sphfem.heat.strained_contact.strained_contact_fv`)
     at the ``window`` samples of the run's impact-point history, driven by the run's own
@@ -332,13 +406,16 @@ def strained_reference(summary: dict, t_contact: float, window: list[dict]):
     return list(Ti - T_s0)
 
 
-def run_one(speed: float, per_diameter: int, t_end_tc: float, out: Path | None = None):
-    """Run one level; returns (figures, wall seconds)."""
+def run_one(speed: float, per_diameter: int, t_end_tc: float, out: Path | None = None,
+            member: int = 0):
+    """Run one level (ensemble ``member``, :func:`scene_at`); returns (figures, wall
+    seconds)."""
     from sphfem.api import run
     from sphfem.scene import parse_scene
 
-    d = scene_at(speed, per_diameter, t_end_tc)
-    sc = parse_scene(d, source=f"droplet-impact V={speed:g} D/dx={per_diameter}")
+    d = scene_at(speed, per_diameter, t_end_tc, member=member)
+    sc = parse_scene(d, source=f"droplet-impact V={speed:g} D/dx={per_diameter} "
+                               f"member {member}")
     drop = next(b for b in d["blocks"] if b["kind"] == "fluid")
     with tempfile.TemporaryDirectory() as tmp:
         folder = Path(out) if out is not None else Path(tmp) / "run"
@@ -346,8 +423,8 @@ def run_one(speed: float, per_diameter: int, t_end_tc: float, out: Path | None =
             res = run(sc, folder, overwrite=True)
         summary = json.loads((folder / "summary.json").read_text())
         if res.status != "completed":
-            raise RuntimeError(f"droplet-impact V={speed:g} D/dx={per_diameter}: run "
-                               f"{res.status}: {summary.get('message')}")
+            raise RuntimeError(f"droplet-impact V={speed:g} D/dx={per_diameter} member "
+                               f"{member}: run {res.status}: {summary.get('message')}")
     return figures(summary, speed, 2.0 * drop["radius"]), t.s
 
 
@@ -373,18 +450,28 @@ def speed_criteria(speed: float, levels, figs: list[dict], quick: bool = False):
         f"{tag}, D/dx={levels[-1]}: max |impact-point rise / strained-contact rise - 1| "
         f"(the run's strain history) over [{T_WINDOW[0]}, {T_WINDOW[1]}] t_c after "
         "contact", fin["T_impact_dev"], TOL_CONTACT)
+    ks = [int(f.get("members", 1)) for f in figs]
     for key, label in FIGURES.items():
         est = richardson(hs, [f[key] for f in figs])
-        rel = ((abs(est.finest - est.value) + est.error_bar) / abs(est.value)
+        se, t95, dof = ensemble_uncertainty(figs, key)
+        # the sampling uncertainty of the limit f_0 = f_3 + q (f_3 - f_2), q = 1 / (r^p - 1),
+        # to first order at the observed p (f_0 = f_3 without one), 95 %
+        q = 1.0 / ((hs[-2] / hs[-1]) ** est.order - 1.0) if est.order is not None else 0.0
+        u = t95 * math.hypot((1.0 + q) * se[-1], q * se[-2])
+        rel = ((abs(est.finest - est.value) + est.error_bar + u) / abs(est.value)
                if est.value else math.inf)
         order = f"{est.order:.2f}" if est.order is not None else "none"
+        scatter = (f"; members {ks}, pooled sd {se[-1] * math.sqrt(ks[-1]):.3g} ({dof} dof), "
+                   f"sampling +- {u:.2g} (95 %)" if dof else "")
         notes.append(f"{tag} {label}: levels {[f'{f[key]:.4g}' for f in figs]}, order "
                      f"{order}, limit {est.value:.4g} +- {est.error_bar:.2g}"
-                     f"{' (' + est.note + ')' if est.note else ''}")
+                     f"{' (' + est.note + ')' if est.note else ''}{scatter}")
         if not quick:
+            what = ("the means' Richardson limit, error bar and sampling uncertainty "
+                    "included" if dof else "the Richardson limit, error bar included")
             crit[f"{tag} {key} converged"] = Criterion(
-                f"{tag}: {label} at D/dx={levels[-1]} within {TOL_CONVERGED:.0%} of the "
-                "Richardson limit, error bar included", rel, TOL_CONVERGED)
+                f"{tag}: {label} at D/dx={levels[-1]} within {TOL_CONVERGED:.0%} of {what}",
+                rel, TOL_CONVERGED)
     if not quick:
         crit[f"{tag} spread max reached"] = Criterion(
             f"{tag}: time of maximum spreading / end time (< 1: the run goes past it)",
@@ -448,8 +535,9 @@ def speed_criteria(speed: float, levels, figs: list[dict], quick: bool = False):
 @register("droplet-impact")
 def droplet_impact(quick: bool) -> CaseResult:
     """The axisymmetric droplet job at three spacings per speed (module docstring): the
-    quick case at 50 m/s and :data:`LEVELS_QUICK`, the full one at :data:`SPEEDS` with
-    :func:`levels_for` each."""
+    quick case at 50 m/s and :data:`LEVELS_QUICK`, one run each; the full one at
+    :data:`SPEEDS` with :func:`levels_for` each, :data:`MEMBERS_FULL` ensemble members per
+    level."""
     speeds = (50.0,) if quick else SPEEDS
     D = 2.0 * next(b for b in base_scene().to_dict()["blocks"] if b["kind"] == "fluid")["radius"]
     runs: list[Run] = []
@@ -460,12 +548,15 @@ def droplet_impact(quick: bool) -> CaseResult:
         t_end = T_END_QUICK if quick else t_end_for(V)
         figs = []
         for n in levels:
-            f, wall = run_one(V, n, t_end)
-            figs.append(f)
-            runs.append(Run(f"{V:g} m/s", D / n, f["particles"], f["T_impact_dev"],
-                            f["T_impact_dev"], wall,
-                            {k: f[k] for k in ("spread", "heat", "T_impact", "vm_peak",
-                                               "vm_t_tc", "steps")}))
+            members = []
+            for m in range(1 if quick else MEMBERS_FULL):
+                f, wall = run_one(V, n, t_end, member=m)
+                members.append(f)
+                runs.append(Run(f"{V:g} m/s member {m}", D / n, f["particles"],
+                                f["T_impact_dev"], f["T_impact_dev"], wall,
+                                {k: f[k] for k in ("spread", "heat", "T_impact", "vm_peak",
+                                                   "vm_t_tc", "steps")}))
+            figs.append(ensemble(members))
         c, nt = speed_criteria(V, levels, figs, quick)
         crit.update(c)
         notes.extend(nt)
