@@ -71,3 +71,27 @@ def test_implausible_order_is_not_asymptotic():
     est = richardson([4, 2, 1], [2.5, 1.96, 1.96 - 0.54 / 2**10])
     assert not est.asymptotic and "implausible" in est.note
     assert est.error_bar == pytest.approx(3.0 * 0.54, rel=0.01)
+
+
+def test_formal_order_caps_the_observed_one():
+    """Roache's rule: an observed order above the formal one is replaced by it, also one
+    above MAX_ORDER (the coarse level ahead of the asymptotic range); below it, nothing
+    changes; oscillatory sequences keep the 3x-spread bar."""
+    h, f = [4, 2, 1], [2.5, 1.96, 1.96 - 0.54 / 2**10]
+    est = richardson(h, f, formal_order=2.0)
+    assert est.asymptotic and est.order == 2.0 and "formal order used" in est.note
+    e32 = f[2] - f[1]
+    assert est.value == pytest.approx(f[2] + e32 / 3.0)  # r = 2, p = 2: r^p - 1 = 3
+    assert est.error_bar == pytest.approx(1.25 * abs(e32) / 3.0)
+    # an exact first-order sequence: the cap at 2 is not reached
+    g = [1.0 + 0.1 * x for x in h]
+    assert richardson(h, g, formal_order=2.0).order == pytest.approx(1.0)
+    # an exact third-order sequence capped at 2: a larger error estimate than its own
+    g3 = [1.0 + 0.1 * x**3 for x in h]
+    own, capped = richardson(h, g3), richardson(h, g3, formal_order=2.0)
+    assert own.order == pytest.approx(3.0) and capped.order == 2.0
+    assert capped.error_bar > own.error_bar
+    osc = richardson(h, [1.0, 1.1, 1.05], formal_order=2.0)
+    assert not osc.asymptotic and osc.error_bar == pytest.approx(3.0 * 0.1)
+    with pytest.raises(ValueError, match="formal_order"):
+        richardson(h, g, formal_order=0.0)

@@ -144,7 +144,7 @@ def plot(path: Path, speed: float, levels, figs: list[dict], member_figs=None) -
         else:
             ax.plot(h, y, "o-", label="SPH-FEM")
         if len(levels) >= 3:
-            est = richardson(h, y)
+            est = richardson(h, y, formal_order=di.FORMAL_ORDER)
             ax.axhline(est.value, color="k", lw=0.8, label="Richardson limit")
             ax.axhspan(est.value - est.error_bar, est.value + est.error_bar, color="k",
                        alpha=0.1, label="error bar (GCI)")

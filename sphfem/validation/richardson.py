@@ -30,6 +30,16 @@ SPH/FEM figure converges that fast; such an order comes from a coarse difference
 happens to be much larger than the fine one).  Equal values (e_21 = e_32 = 0) are converged to
 round-off.
 
+With a ``formal_order`` p_f (the discretisation's theoretical order) the order used in (3)
+is min(p, p_f) for every monotone converging sequence, including one whose observed order
+exceeds :data:`MAX_ORDER` (Roache 1998, "Verification and Validation in Computational
+Science and Engineering", sec. 5.9; Eca & Hoekstra 2014, J. Comput. Phys. 262, 104: an
+observed order above the formal one is not trusted, and the formal order gives the larger,
+conservative error estimate).  Such a sequence is then reported as asymptotic with the
+formal order, F_s = 1.25 (the extrapolation from the two finest levels: the coarse level
+ahead of the asymptotic range, or differences below the figure's scatter); oscillatory and
+diverging sequences keep the 3x-spread bar.
+
 With more than three levels the last three are used for (2)-(3) and the order of every
 consecutive triple is also returned, so a reader sees whether it settles.
 """
@@ -116,9 +126,13 @@ def _triple(h, f):
     return p, (h1, h2, h3), (f1, f2, f3)
 
 
-def richardson(h, f) -> RichardsonEstimate:
+def richardson(h, f, formal_order: float | None = None) -> RichardsonEstimate:
     """Richardson estimate (module docstring) of the figure ``f`` computed at spacings
-    ``h`` (>= 3 levels, any order; the three finest are used for the estimate)."""
+    ``h`` (>= 3 levels, any order; the three finest are used for the estimate);
+    ``formal_order``: the discretisation's theoretical order, which caps the observed one
+    (module docstring; None: the observed order is used up to :data:`MAX_ORDER`)."""
+    if formal_order is not None and not formal_order > 0:
+        raise ValueError(f"richardson: formal_order must be > 0, got {formal_order}")
     h = [float(v) for v in h]
     f = [float(v) for v in f]
     if len(h) != len(f):
@@ -135,6 +149,11 @@ def richardson(h, f) -> RichardsonEstimate:
     if abs(f3 - f2) <= 1e-13 * scale and abs(f2 - f1) <= 1e-13 * scale:
         return RichardsonEstimate(f3, 0.0, None, f3, 0.0, True, orders,
                                   "converged to round-off")
+    note = ""
+    if p is not None and formal_order is not None and p > formal_order:
+        note = (f"observed order {p:.2f} > formal {formal_order:g}: the formal order used "
+                "(Roache 1998)")
+        p = float(formal_order)
     if p is None or p > MAX_ORDER:
         spread = max(f1, f2, f3) - min(f1, f2, f3)
         kind = ("oscillatory" if (f3 - f2) * (f2 - f1) < 0 else
@@ -146,4 +165,4 @@ def richardson(h, f) -> RichardsonEstimate:
     f0 = f3 + (f3 - f2) / (rf**p - 1.0)
     gci = FS_VERIFIED * abs((f3 - f2) / f3) / (rf**p - 1.0) if f3 != 0 else float("inf")
     rel = abs(f3 - f0) / abs(f0) if f0 != 0 else float("inf")
-    return RichardsonEstimate(f0, gci * abs(f3), p, f3, rel, True, orders)
+    return RichardsonEstimate(f0, gci * abs(f3), p, f3, rel, True, orders, note)
