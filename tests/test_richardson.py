@@ -95,3 +95,25 @@ def test_formal_order_caps_the_observed_one():
     assert not osc.asymptotic and osc.error_bar == pytest.approx(3.0 * 0.1)
     with pytest.raises(ValueError, match="formal_order"):
         richardson(h, g, formal_order=0.0)
+
+
+def test_an_oscillation_within_the_noise_is_not_classified():
+    """Ensemble means 57.7, 47.1, 47.3 (the finest step +0.2 against a sampling half-width
+    of 2.4 per level): not an oscillation the data can show, so the formal order gives the
+    estimate; a significant oscillation keeps the 3x-spread bar; noise needs a formal order."""
+    h, f = [1.56, 1.11, 0.78], [57.7, 47.1, 47.3]
+    plain = richardson(h, f, formal_order=2.0)
+    assert not plain.asymptotic and plain.error_bar == pytest.approx(3.0 * 10.6)
+    est = richardson(h, f, formal_order=2.0, noise=[2.4, 2.4, 2.4])
+    assert est.asymptotic and est.order == 2.0 and "within the sampling noise" in est.note
+    r = 1.11 / 0.78
+    assert est.value == pytest.approx(47.3 + 0.2 / (r**2 - 1.0))
+    assert est.error_bar == pytest.approx(1.25 * 0.2 / (r**2 - 1.0))
+    # the input order does not matter: the noise follows its level
+    assert richardson(h[::-1], f[::-1], 2.0, [2.4] * 3).value == pytest.approx(est.value)
+    loud = richardson(h, [57.7, 47.1, 52.3], formal_order=2.0, noise=[2.4, 2.4, 2.4])
+    assert not loud.asymptotic and "oscillatory" in loud.note
+    with pytest.raises(ValueError, match="noise needs a formal_order"):
+        richardson(h, f, noise=[1.0] * 3)
+    with pytest.raises(ValueError, match="noise half-widths"):
+        richardson(h, f, 2.0, noise=[1.0] * 2)

@@ -144,7 +144,8 @@ def plot(path: Path, speed: float, levels, figs: list[dict], member_figs=None) -
         else:
             ax.plot(h, y, "o-", label="SPH-FEM")
         if len(levels) >= 3:
-            est = richardson(h, y, formal_order=di.FORMAL_ORDER)
+            est = richardson(h, y, formal_order=di.FORMAL_ORDER,
+                             noise=[t95 * e * scale[key] for e in se] if dof else None)
             ax.axhline(est.value, color="k", lw=0.8, label="Richardson limit")
             ax.axhspan(est.value - est.error_bar, est.value + est.error_bar, color="k",
                        alpha=0.1, label="error bar (GCI)")

@@ -28,7 +28,9 @@ Each figure gets an observed order, a Richardson limit and a GCI error bar
   included (|f_h - f_0| + GCI |f_h| <= 0.1 |f_0|); an oscillatory or diverging sequence
   gets a 3x-spread error bar and fails unless the spread is small; an observed order above
   the formal :data:`FORMAL_ORDER` is capped to it (Roache's rule: the coarse level is ahead
-  of the asymptotic range, the estimate comes from the two finest).  The spread and the heat
+  of the asymptotic range, the estimate comes from the two finest), and so is a sequence
+  read as oscillatory or diverging whose finest step lies within the ensembles' sampling
+  noise (the data cannot classify it).  The spread and the heat
   are chaotic: a perturbation of 1e-3 dx moves one run's by ~5 % (the rim's breakup, the
   contact line's pauses), so single runs cannot show them converged to 10 %.  The full case
   therefore runs an ensemble per level (:data:`MEMBERS_FULL` members, :func:`scene_at`'s
@@ -458,8 +460,9 @@ def speed_criteria(speed: float, levels, figs: list[dict], quick: bool = False):
         "contact", fin["T_impact_dev"], TOL_CONTACT)
     ks = [int(f.get("members", 1)) for f in figs]
     for key, label in FIGURES.items():
-        est = richardson(hs, [f[key] for f in figs], formal_order=FORMAL_ORDER)
         se, t95, dof = ensemble_uncertainty(figs, key)
+        est = richardson(hs, [f[key] for f in figs], formal_order=FORMAL_ORDER,
+                         noise=[t95 * e for e in se] if dof else None)
         # the sampling uncertainty of the limit f_0 = f_3 + q (f_3 - f_2), q = 1 / (r^p - 1),
         # to first order at the observed p (f_0 = f_3 without one), 95 %
         q = 1.0 / ((hs[-2] / hs[-1]) ** est.order - 1.0) if est.order is not None else 0.0

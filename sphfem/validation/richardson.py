@@ -126,23 +126,32 @@ def _triple(h, f):
     return p, (h1, h2, h3), (f1, f2, f3)
 
 
-def richardson(h, f, formal_order: float | None = None) -> RichardsonEstimate:
+def richardson(h, f, formal_order: float | None = None, noise=None) -> RichardsonEstimate:
     """Richardson estimate (module docstring) of the figure ``f`` computed at spacings
     ``h`` (>= 3 levels, any order; the three finest are used for the estimate);
     ``formal_order``: the discretisation's theoretical order, which caps the observed one
-    (module docstring; None: the observed order is used up to :data:`MAX_ORDER`)."""
+    (module docstring; None: the observed order is used up to :data:`MAX_ORDER`);
+    ``noise``: each value's sampling half-width (e.g. a 95 % interval of an ensemble mean;
+    needs ``formal_order``): a sequence read as oscillatory or diverging whose finest
+    difference is not significant, |f_3 - f_2| <= hypot(noise_2, noise_3), is not
+    classified by the data, and is estimated with the formal order like a sequence that
+    settled in one step (the sampling uncertainty itself is the caller's to add)."""
     if formal_order is not None and not formal_order > 0:
         raise ValueError(f"richardson: formal_order must be > 0, got {formal_order}")
+    if noise is not None and formal_order is None:
+        raise ValueError("richardson: noise needs a formal_order")
     h = [float(v) for v in h]
     f = [float(v) for v in f]
-    if len(h) != len(f):
-        raise ValueError(f"richardson: {len(h)} spacings but {len(f)} values")
+    u = [float(v) for v in noise] if noise is not None else [0.0] * len(f)
+    if len(h) != len(f) or len(u) != len(f):
+        raise ValueError(f"richardson: {len(h)} spacings but {len(f)} values"
+                         + (f" and {len(u)} noise half-widths" if noise is not None else ""))
     if len(h) < 3:
         raise ValueError(f"richardson: needs at least 3 resolutions, got {len(h)}")
     if any(not math.isfinite(v) for v in f):
         raise ValueError(f"richardson: non-finite value in {f}")
-    pairs = sorted(zip(h, f, strict=True), key=lambda t: -t[0])
-    hs, fs = [p[0] for p in pairs], [p[1] for p in pairs]
+    pairs = sorted(zip(h, f, u, strict=True), key=lambda t: -t[0])
+    hs, fs, us = [p[0] for p in pairs], [p[1] for p in pairs], [p[2] for p in pairs]
     orders = [observed_order(hs[i:i + 3], fs[i:i + 3]) for i in range(len(hs) - 2)]
     p, (h1, h2, h3), (f1, f2, f3) = _triple(hs[-3:], fs[-3:])
     scale = max(abs(f1), abs(f2), abs(f3), 1e-300)
@@ -150,7 +159,12 @@ def richardson(h, f, formal_order: float | None = None) -> RichardsonEstimate:
         return RichardsonEstimate(f3, 0.0, None, f3, 0.0, True, orders,
                                   "converged to round-off")
     note = ""
-    if p is not None and formal_order is not None and p > formal_order:
+    if p is None and noise is not None and abs(f3 - f2) <= math.hypot(us[-2], us[-1]):
+        p = float(formal_order)
+        note = (f"{'oscillatory' if (f3 - f2) * (f2 - f1) < 0 else 'not converging'} by "
+                f"{abs(f3 - f2):.3g}, within the sampling noise {math.hypot(us[-2], us[-1]):.2g}"
+                f": the formal order {formal_order:g} used")
+    elif p is not None and formal_order is not None and p > formal_order:
         note = (f"observed order {p:.2f} > formal {formal_order:g}: the formal order used "
                 "(Roache 1998)")
         p = float(formal_order)
