@@ -124,8 +124,6 @@ def plot(path: Path, speed: float, levels, figs: list[dict], member_figs=None) -
 
     from sphfem.validation import droplet_impact as di
     from sphfem.validation.droplet_impact import FIGURES
-    from sphfem.validation.richardson import richardson
-
     D = figs[-1]["tc"] * speed
     h = [D / n * 1e6 for n in levels]
     scale = {"spread": 1.0, "heat": 1e6, "T_impact": 1.0, "vm_peak": 1e-6}
@@ -135,7 +133,7 @@ def plot(path: Path, speed: float, levels, figs: list[dict], member_figs=None) -
     for ax, key in zip(axs, FIGURES, strict=True):
         y = [f[key] * scale[key] for f in figs]
         se, t95, dof = di.ensemble_uncertainty(figs, key)
-        if dof:
+        if dof and member_figs:
             for hi, g in zip(h, member_figs, strict=True):
                 ax.plot([hi] * len(g), [f[key] * scale[key] for f in g.values()], ".",
                         color="0.5", ms=4)
@@ -144,11 +142,13 @@ def plot(path: Path, speed: float, levels, figs: list[dict], member_figs=None) -
         else:
             ax.plot(h, y, "o-", label="SPH-FEM")
         if len(levels) >= 3:
-            est = richardson(h, y, formal_order=di.FORMAL_ORDER,
-                             noise=[t95 * e * scale[key] for e in se] if dof else None)
-            ax.axhline(est.value, color="k", lw=0.8, label="Richardson limit")
-            ax.axhspan(est.value - est.error_bar, est.value + est.error_bar, color="k",
-                       alpha=0.1, label="error bar (GCI)")
+            est, u, _, _ = di.figure_estimate([D / n for n in levels], figs, key)
+            v, bar, u = (x * scale[key] for x in (est.value, est.error_bar, u))
+            ax.axhline(v, color="k", lw=0.8, label="Richardson limit")
+            ax.axhspan(v - bar, v + bar, color="k", alpha=0.15, label="error bar (GCI)")
+            if u:
+                ax.axhspan(v - bar - u, v + bar + u, color="k", alpha=0.06,
+                           label="+ sampling (95 %)")
         if key == "spread":
             lo, hi = figs[-1]["correlations"]
             ax.axhspan(lo, hi, color="tab:green", alpha=0.25, label="correlations")

@@ -441,6 +441,19 @@ def _one_decimal(v) -> str:
     return "-" if v is None else f"{v:.1f}"
 
 
+def figure_estimate(hs, figs: list[dict], key: str):
+    """The Richardson estimate of ``key`` over the levels' figures ``figs`` (ensembles or
+    single runs, :func:`ensemble`) at spacings ``hs`` (coarse to fine), with the formal order
+    and the ensembles' noise, and the 95 % sampling uncertainty u of its limit: f_0 = f_3 +
+    q (f_3 - f_2), q = 1 / (r^p - 1), to first order at the order used (f_0 = f_3 without
+    one).  Returns (estimate, u, the levels' standard errors, degrees of freedom)."""
+    se, t95, dof = ensemble_uncertainty(figs, key)
+    est = richardson(hs, [f[key] for f in figs], formal_order=FORMAL_ORDER,
+                     noise=[t95 * e for e in se] if dof else None)
+    q = 1.0 / ((hs[-2] / hs[-1]) ** est.order - 1.0) if est.order is not None else 0.0
+    return est, t95 * math.hypot((1.0 + q) * se[-1], q * se[-2]), se, dof
+
+
 def speed_criteria(speed: float, levels, figs: list[dict], quick: bool = False):
     """The criteria (name -> :class:`Criterion`) and notes of one impact speed from the
     figures (:func:`figures`) of its ``levels`` (particles across the droplet, coarse to
@@ -460,13 +473,7 @@ def speed_criteria(speed: float, levels, figs: list[dict], quick: bool = False):
         "contact", fin["T_impact_dev"], TOL_CONTACT)
     ks = [int(f.get("members", 1)) for f in figs]
     for key, label in FIGURES.items():
-        se, t95, dof = ensemble_uncertainty(figs, key)
-        est = richardson(hs, [f[key] for f in figs], formal_order=FORMAL_ORDER,
-                         noise=[t95 * e for e in se] if dof else None)
-        # the sampling uncertainty of the limit f_0 = f_3 + q (f_3 - f_2), q = 1 / (r^p - 1),
-        # to first order at the observed p (f_0 = f_3 without one), 95 %
-        q = 1.0 / ((hs[-2] / hs[-1]) ** est.order - 1.0) if est.order is not None else 0.0
-        u = t95 * math.hypot((1.0 + q) * se[-1], q * se[-2])
+        est, u, se, dof = figure_estimate(hs, figs, key)
         rel = ((abs(est.finest - est.value) + est.error_bar + u) / abs(est.value)
                if est.value else math.inf)
         order = f"{est.order:.2f}" if est.order is not None else "none"
