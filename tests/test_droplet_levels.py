@@ -122,6 +122,12 @@ def test_convergence_script_reads_levels_from_an_earlier_json(tmp_path, capsys):
         crit["10 m/s spread converged"].value)
     with pytest.raises(SystemExit):
         conv.main(["10", "--out", str(out2), "--members", "2", "--member", "2"])
+    # --no-run reads what there is and runs nothing: a third member is missing everywhere
+    assert conv.main(["10", "--out", str(out2), "--levels", *map(str, levels), "--t-end-tc",
+                      "4", "--members", "3", "--no-run", "--figures-from", str(src2)]) in (0, 1)
+    printed = capsys.readouterr().out
+    assert "members completed per level [2, 2, 2] of 3" in printed
+    assert not any(p.is_dir() for p in out2.iterdir())
 
 
 def test_convergence_script_runs_one_level_without_criteria(tmp_path, capsys):

@@ -3,7 +3,7 @@
     python examples/droplet_impact/convergence.py SPEED --out DIR [--levels N N N ...]
                                                   [--members K] [--member M ...]
                                                   [--t-end-tc T] [--figures-from JSON ...]
-                                                  [--prune]
+                                                  [--prune] [--no-run]
 
 Runs the validation's scene (:func:`sphfem.validation.droplet_impact.scene_at`) at SPEED
 [m/s] and each level N (particles across the droplet; default: the case's own three,
@@ -24,7 +24,8 @@ criteria then take the level means and their sampling uncertainty
 (:func:`~sphfem.validation.droplet_impact.ensemble`).  ``--member M`` (repeatable) runs only
 those members, reading the others' completed folders: two processes with different members
 share the two cores of a machine (``NUMBA_NUM_THREADS=1`` each); the criteria are printed
-from the members completed so far, with their counts.  ``--prune`` deletes a completed
+from the members completed so far, with their counts.  ``--no-run`` runs nothing and reads
+what has completed (a look at the state of running ensembles).  ``--prune`` deletes a completed
 run's particle and substrate VTU series (the checkpoint and ``summary.json`` stay; a D/dx
 181 level writes ~10 GB).
 
@@ -162,6 +163,27 @@ def plot(path: Path, speed: float, levels, figs: list[dict], member_figs=None) -
     plt.close(fig)
 
 
+def members_table(levels, member_figs) -> str:
+    """A markdown table of each level's members and their mean and sample sd (the four
+    figures in D_max/D, uJ, K and MPa)."""
+    import statistics
+
+    scale = {"spread": (1.0, "{:.3f}"), "heat": (1e6, "{:.1f}"), "T_impact": (1.0, "{:.2f}"),
+             "vm_peak": (1e-6, "{:.2f}")}
+    rows = ["| D/dx | members | D_max/D | heat [uJ] | rise [K] | peak vM [MPa] |",
+            "|---|---|---|---|---|---|"]
+    for n, g in zip(levels, member_figs, strict=True):
+        cells = []
+        for key, (k, fmt) in scale.items():
+            v = [g[m][key] * k for m in sorted(g)]
+            sd = (f", sd {fmt.format(statistics.stdev(v))}" if len(v) > 1 else "")
+            cells.append(" / ".join(fmt.format(x) for x in v)
+                         + (f": mean {fmt.format(statistics.fmean(v))}{sd}" if len(v) > 1
+                            else ""))
+        rows.append(f"| {n} | {', '.join(map(str, sorted(g)))} | " + " | ".join(cells) + " |")
+    return "\n".join(rows)
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("speed", type=float, help="impact speed [m/s]")
@@ -177,6 +199,8 @@ def main(argv=None) -> int:
     ap.add_argument("--figures-from", type=Path, nargs="+", default=[],
                     help="earlier convergence_V*.json files: members without a completed "
                          "folder in --out take their figures from these")
+    ap.add_argument("--no-run", action="store_true",
+                    help="run nothing: read the completed members (and --figures-from) only")
     ap.add_argument("--prune", action="store_true",
                     help="delete a completed run's VTU series (summary and checkpoint stay)")
     a = ap.parse_args(argv)
@@ -206,8 +230,8 @@ def main(argv=None) -> int:
             if s is None and (n, m) in earlier:
                 f, origin = earlier[n, m]
                 print(f"D/dx {n} member {m}: figures from {origin}")
-            elif s is None and a.member and m not in a.member:
-                continue  # another process's member, not completed yet
+            elif s is None and (a.no_run or (a.member and m not in a.member)):
+                continue  # not to be run here (another process's member, or --no-run)
             else:
                 s = s or run_level(a.speed, n, t_end, folder, m)
                 f = di.figures(s, a.speed, 2.0 * next(
@@ -231,6 +255,7 @@ def main(argv=None) -> int:
     if any(c < a.members for c in counts):
         print(f"members completed per level {counts} of {a.members}: the criteria below are "
               "from those")
+    print(members_table(levels, member_figs))
     crit, notes = di.speed_criteria(a.speed, levels, figs)
     for name, c in crit.items():
         print(f"[{'PASS' if c.passed else 'FAIL'}] {name}: {c.value:.4g} {c.op} {c.limit:g}")
