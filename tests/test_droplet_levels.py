@@ -259,6 +259,8 @@ def test_ensemble_means_worst_gates_and_sample_deviation():
     assert e["spread_members"] == [m0["spread"], m1["spread"], m2["spread"]]
     assert e["balance"] == 3e-12 and e["T_impact_dev"] == 0.07  # the worst member's
     assert e["wall_s"] == 8.0  # the ensemble's cost
+    short = {k: v for k, v in m2.items() if k != "lamella_ratio"}  # an older member
+    assert math.isnan(di.ensemble([m1, short])["lamella_ratio"])
     one = di.ensemble([m1])
     assert one["members"] == 1 and one["heat_sd"] == 0.0 and one["heat"] == m1["heat"]
     with pytest.raises(ValueError, match="at least one member"):

@@ -336,7 +336,8 @@ def ensemble(members: list[dict]) -> dict:
     for key, v in members[0].items():
         if isinstance(v, bool) or not isinstance(v, (int, float)):
             continue
-        vals = [float(m[key]) for m in members]
+        # a member read from an older JSON may lack a context figure: nan, not a KeyError
+        vals = [float(m.get(key, math.nan)) for m in members]
         out[key] = (max(vals) if key in ENSEMBLE_WORST else sum(vals) if key == "wall_s"
                     else sum(vals) / k)
     for key in FIGURES:
