@@ -114,10 +114,10 @@ def run_level(speed: float, n: int, t_end_tc: float, folder: Path, member: int =
     return json.loads((folder / "summary.json").read_text())
 
 
-def plot(path: Path, speed: float, levels, figs: list[dict], member_figs=None) -> None:
+def plot(path: Path, speed: float, levels, figs: list[dict]) -> None:
     """The four figures against dx (with their Richardson limits) and the spread band;
-    with ensembles (``member_figs``: per level, member -> figures) the members as dots and
-    the means with their 95 % sampling interval."""
+    with ensembles (``figs`` from :func:`~sphfem.validation.droplet_impact.ensemble`) the
+    members as dots and the means with their 95 % sampling interval."""
     import matplotlib
 
     matplotlib.use("Agg")
@@ -134,10 +134,10 @@ def plot(path: Path, speed: float, levels, figs: list[dict], member_figs=None) -
     for ax, key in zip(axs, FIGURES, strict=True):
         y = [f[key] * scale[key] for f in figs]
         se, t95, dof = di.ensemble_uncertainty(figs, key)
-        if dof and member_figs:
-            for hi, g in zip(h, member_figs, strict=True):
-                ax.plot([hi] * len(g), [f[key] * scale[key] for f in g.values()], ".",
-                        color="0.5", ms=4)
+        if dof:
+            for hi, f in zip(h, figs, strict=True):
+                ax.plot([hi] * f["members"], [v * scale[key] for v in f[f"{key}_members"]],
+                        ".", color="0.5", ms=4)
             ax.errorbar(h, y, yerr=[t95 * e * scale[key] for e in se], fmt="o-", capsize=3,
                         label="SPH-FEM ensemble means (95 %)")
         else:
@@ -163,24 +163,22 @@ def plot(path: Path, speed: float, levels, figs: list[dict], member_figs=None) -
     plt.close(fig)
 
 
-def members_table(levels, member_figs) -> str:
-    """A markdown table of each level's members and their mean and sample sd (the four
+def members_table(levels, figs: list[dict], member_ids) -> str:
+    """A markdown table of each level's members (``member_ids``) and their mean and sample sd
+    (``figs``: each level's :func:`~sphfem.validation.droplet_impact.ensemble`; the four
     figures in D_max/D, uJ, K and MPa)."""
-    import statistics
-
     scale = {"spread": (1.0, "{:.3f}"), "heat": (1e6, "{:.1f}"), "T_impact": (1.0, "{:.2f}"),
              "vm_peak": (1e-6, "{:.2f}")}
     rows = ["| D/dx | members | D_max/D | heat [uJ] | rise [K] | peak vM [MPa] |",
             "|---|---|---|---|---|---|"]
-    for n, g in zip(levels, member_figs, strict=True):
+    for n, f, ids in zip(levels, figs, member_ids, strict=True):
         cells = []
         for key, (k, fmt) in scale.items():
-            v = [g[m][key] * k for m in sorted(g)]
-            sd = (f", sd {fmt.format(statistics.stdev(v))}" if len(v) > 1 else "")
-            cells.append(" / ".join(fmt.format(x) for x in v)
-                         + (f": mean {fmt.format(statistics.fmean(v))}{sd}" if len(v) > 1
-                            else ""))
-        rows.append(f"| {n} | {', '.join(map(str, sorted(g)))} | " + " | ".join(cells) + " |")
+            cell = " / ".join(fmt.format(x * k) for x in f[f"{key}_members"])
+            if f["members"] > 1:
+                cell += f": mean {fmt.format(f[key] * k)}, sd {fmt.format(f[key + '_sd'] * k)}"
+            cells.append(cell)
+        rows.append(f"| {n} | {', '.join(map(str, ids))} | " + " | ".join(cells) + " |")
     return "\n".join(rows)
 
 
@@ -255,7 +253,7 @@ def main(argv=None) -> int:
     if any(c < a.members for c in counts):
         print(f"members completed per level {counts} of {a.members}: the criteria below are "
               "from those")
-    print(members_table(levels, member_figs))
+    print(members_table(levels, figs, [sorted(g) for g in member_figs]))
     crit, notes = di.speed_criteria(a.speed, levels, figs)
     for name, c in crit.items():
         print(f"[{'PASS' if c.passed else 'FAIL'}] {name}: {c.value:.4g} {c.op} {c.limit:g}")
@@ -281,7 +279,7 @@ def main(argv=None) -> int:
                          "passed": bool(c.passed), "description": c.description}
                      for k, c in crit.items()},
         "notes": notes})
-    plot(a.out / f"convergence_V{a.speed:g}.png", a.speed, levels, figs, member_figs)
+    plot(a.out / f"convergence_V{a.speed:g}.png", a.speed, levels, figs)
     return 0 if all(c.passed for c in crit.values()) else 1
 
 
