@@ -288,6 +288,7 @@ class AxisymmetricFluidModule(PhysicsModule):
         "kernel", "wall_normals", "smooth_hoop", "no_penetration", "surface_tension",
         "shifting", "shift_surface", "shift_speed", "skin", "shift_surface_lambda",
         "shift_drift", "wall_friction", "film_tension", "axis_floor", "stress_plane",
+        "contact_line_slip", "contact_line_slip_length",
         "csf_meridian"})
     #: rings are kept at r >= AXIS_FLOOR_DX dx (the fluid's spacing; the lattice's first
     #: column sits at dx / 2): next to the axis a ring's meridian area grows as 1 / r and its
@@ -374,6 +375,10 @@ class AxisymmetricFluidModule(PhysicsModule):
             shift_drift=self.params.shifting_drift,
             wall_friction=self.scene.fluid.wall_friction,
             film_tension=self.scene.fluid.film_tension,
+            contact_line_slip=self.scene.fluid.contact_line == "slip",
+            contact_line_slip_length=(self.scene.fluid.contact_line_slip_length
+                                      if self.scene.fluid.contact_line == "cox-voinov"
+                                      else 0.0),
             axis_floor=self.AXIS_FLOOR_DX * float(dxf[0]),
             stress_plane=self._wall_top(x, kind, A), **self._options())
         self.nrm = nrm

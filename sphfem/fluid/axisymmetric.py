@@ -799,6 +799,11 @@ class AxisymmetricFluid:
     rings, which regularises the moving contact line's stress singularity (Huh & Scriven
     1971) over one support.
 
+    ``contact_line_slip_length`` (lambda > 0; ``wall_friction = "layer"`` and surface tension):
+    the contact line's rings carry the friction of the wedge below the spacing, Cox's (1986)
+    law between lambda and dx / 2 (:mod:`sphfem.fluid.contact_line_cox1986`), f_i <- f_i +
+    (f_cl,i - f_i) w_i with f_cl,i from ring i's speed along the wall.
+
     ``debris_rings`` (> 0): every DEBRIS_EVERY steps the free-flying clusters of at most this
     many rings (clear of the walls by R) become inert (:mod:`sphfem.fluid.axisymmetric_debris`:
     a torus of a few rings moving towards the axis cannot thicken as a resolved one does,
@@ -821,7 +826,7 @@ class AxisymmetricFluid:
                  shift_surface_lambda: float = 0.75, shift_drift: str = "kept",
                  axis_floor: float = 0.0, stress_plane: float | None = None,
                  bulk_damping: float = 0.0, debris_rings: int = 0,
-                 contact_line_slip: bool = False):
+                 contact_line_slip: bool = False, contact_line_slip_length: float = 0.0):
         self.x = np.array(x, dtype=np.float64)
         n = self.n = self.x.shape[0]
         self.v = np.array(v, dtype=np.float64).reshape(n, 2)
@@ -895,6 +900,22 @@ class AxisymmetricFluid:
         #: True: the wall layer's friction factor goes to 0 (not to 1) at the contact line
         #: (``wall_friction = "layer"``; class docstring)
         self.contact_line_slip = bool(contact_line_slip)
+        if not (contact_line_slip_length >= 0.0 and math.isfinite(contact_line_slip_length)):
+            raise ValueError("contact_line_slip_length must be a finite length >= 0, got "
+                             f"{contact_line_slip_length!r}")
+        if contact_line_slip_length > 0.0:
+            if wall_friction != "layer":
+                raise ValueError("contact_line_slip_length (the Cox-Voinov contact line) needs "
+                                 "wall_friction = 'layer'")
+            if not surface_tension > 0.0:
+                raise ValueError("contact_line_slip_length (the Cox-Voinov contact line) needs "
+                                 "surface tension")
+            if contact_line_slip:
+                raise ValueError("contact_line_slip and contact_line_slip_length exclude each "
+                                 "other")
+        #: > 0: the contact line's rings carry the sub-grid wedge friction of Cox (1986)
+        #: with this slip length [m] (:mod:`sphfem.fluid.contact_line_cox1986`)
+        self.contact_line_slip_length = float(contact_line_slip_length)
         #: the inert rings (debris): in no pair sum, flying ballistically
         self.inert = np.zeros(n, bool)
         #: (t [s], rows) of each debris detection that found some
@@ -1247,7 +1268,19 @@ class AxisymmetricFluid:
                       nl.indices, Rp, self.kcode)
         fw = friction_factor(self.delta2, self.wall_dx, self.wall_S, nu, dt, self.h,
                              self.params.visc_cfl)
-        if self.contact_line_slip:  # the contact line's rings slide freely
+        if self.contact_line_slip_length > 0.0:  # the sub-grid wedge's friction (Cox 1986)
+            from sphfem.fluid.contact_line_cox1986 import contact_line_factors
+
+            bn = self._layer[5]
+            v = self.v
+            vn = v[:, 0] * bn[:, 0] + v[:, 1] * bn[:, 1]
+            ut = np.hypot(v[:, 0] - vn * bn[:, 0], v[:, 1] - vn * bn[:, 1])
+            fcl = contact_line_factors(ut, self.wall_S, self.wall_dx,
+                                       self.contact_line_slip_length, self.params.mu,
+                                       self.csf.sigma)
+            cap = max(1.0, self.params.visc_cfl * self.h * self.h / (nu * dt))
+            self.fw = fw + (np.minimum(fcl, cap) - fw) * cl
+        elif self.contact_line_slip:  # the contact line's rings slide freely
             self.fw = fw * (1.0 - cl)
         else:
             self.fw = 1.0 + (fw - 1.0) * (1.0 - cl)

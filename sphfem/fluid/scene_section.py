@@ -46,6 +46,9 @@ def _check(rec, ctx, path):
     if rec.wall_friction != "sph" and getattr(meta, "geometry", None) != "axisymmetric":
         ctx.error(f"{path}.wall_friction", f"wall_friction = \"{rec.wall_friction}\" is "
                   "implemented for geometry = \"axisymmetric\" only (use \"sph\")")
+    if rec.contact_line != "no-slip" and rec.wall_friction != "layer":
+        ctx.error(f"{path}.contact_line", f"contact_line = \"{rec.contact_line}\" is a model "
+                  "of the wall layer's friction: it needs wall_friction = \"layer\"")
     if rec.film_tension and getattr(meta, "geometry", None) != "axisymmetric":
         ctx.error(f"{path}.film_tension", "film_tension is implemented for geometry = "
                   "\"axisymmetric\" only")
@@ -111,6 +114,16 @@ FLUID = Section("fluid", (
               "thinner than the spacing, d(delta^2)/dt = pi nu - 2 a delta^2 "
               "(sphfem.fluid.wall_layer), no artificial viscosity on wall pairs; none = free "
               "slip (neither term on wall pairs)"),
+    Param("contact_line", str, "no-slip", choices=("no-slip", "slip", "cox-voinov"),
+          doc="the moving contact line's friction (axisymmetric fluid, wall_friction = "
+              "\"layer\"): no-slip = the plain no-slip wall term on the rings at the end of a "
+              "wall row; slip = none there (they slide freely); cox-voinov = the friction of "
+              "the liquid wedge between contact_line_slip_length and dx / 2 from Cox's (1986) "
+              "law at each ring's speed, 90-degree static angle "
+              "(sphfem.fluid.contact_line_cox1986)"),
+    Param("contact_line_slip_length", float, 1.0e-9, gt=0.0, unit="m",
+          doc="slip length lambda [m] of contact_line = \"cox-voinov\": the molecular scale "
+              "where the wedge's viscous stress is cut off"),
     Param("film_tension", bool, False,
           doc="axisymmetric CSF: films thinner than about the kernel support carry the "
               "line tension of their faces as a membrane stress (2 sigma free, sigma on a "
