@@ -7,6 +7,7 @@ import math
 import numpy as np
 import pytest
 from scipy.optimize import brentq
+from test_axisymmetric_damper_and_wall import DX, _film_on_wall
 
 from sphfem.fluid.axisymmetric import AxisymmetricFluid
 from sphfem.fluid.contact_line_cox1986 import (
@@ -19,7 +20,6 @@ from sphfem.fluid.contact_line_cox1986 import (
 )
 from sphfem.fluid.wall_layer import plug_traction_constant
 from sphfem.particles import FLUID
-from test_axisymmetric_damper_and_wall import DX, _film_on_wall
 
 
 def test_wedge_function_is_voinovs_law_at_small_angles_and_its_slope_is_g_prime():

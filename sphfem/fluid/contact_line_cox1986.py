@@ -32,13 +32,13 @@ the full law (2) at each ring's own speed along the wall:
     phi(c) = (cos theta_s - cos theta_Delta(c)) / c,    phi(0) = sin theta_s / g'(theta_s),  (3')
 
 the advancing branch (theta_Delta > theta_s) for either direction of motion: a receding
-line's larger friction (g is steeper below 90 degrees) is not modelled.  This is the approach of Afkhami,
-Zaleski & Bussmann (2009, J. Comput. Phys. 228, 5370), who impose theta_Delta from (2) at
-the grid scale so that the computed spreading stops depending on the grid: here (3) enters
-as the friction of the contact line's rings instead of as a boundary angle.  Refining moves
-wedge dissipation from (3) into the resolved flow; the sum stays mu U ln(L / lambda) /
-g'(theta_s) (1).  The linearisation is within 7 % of (2) for Ca ln(Delta / lambda) <= 0.25
-at 90 degrees.
+line's larger friction (g is steeper below 90 degrees) is not modelled.
+
+This is the approach of Afkhami, Zaleski & Bussmann (2009, J. Comput. Phys. 228, 5370), who
+impose theta_Delta from (2) at the grid scale so that the computed spreading stops depending
+on the grid: here it enters as the friction of the contact line's rings instead of as a
+boundary angle.  Refining moves wedge dissipation from (3') into the resolved flow; the sum
+stays mu U ln(L / lambda) / g'(theta_s) (1).
 
 In the wall layer's friction (:mod:`sphfem.fluid.wall_layer`) the rings at the end of a wall
 row (weight w of :func:`~sphfem.fluid.wall_layer.contact_line_weight`) carry the factor
