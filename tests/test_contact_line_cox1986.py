@@ -44,7 +44,7 @@ def test_secant_ratio_solves_cox_law_and_linearises_to_four_over_pi():
     assert secant_ratio(0.0)[()] == pytest.approx(4.0 / math.pi, rel=1e-12)
     g0 = wedge_function(math.pi / 2)
     for c in (0.01, 0.1, 0.3, 1.0, 3.0):
-        th = brentq(lambda t: wedge_function(t) - g0 - c, math.pi / 2, math.pi - 1e-9)
+        th = brentq(lambda t, c=c: wedge_function(t) - g0 - c, math.pi / 2, math.pi - 1e-9)
         assert secant_ratio(c)[()] == pytest.approx(-math.cos(th) / c, rel=1e-4)
     phi = secant_ratio(np.linspace(0.0, 2.0, 41))
     assert np.all(np.diff(phi) < 0.0)
@@ -52,7 +52,7 @@ def test_secant_ratio_solves_cox_law_and_linearises_to_four_over_pi():
     for deg in (60.0, 120.0):  # another static angle: the same check
         th_s = math.radians(deg)
         gs = wedge_function(th_s)
-        th = brentq(lambda t: wedge_function(t) - gs - 0.2, th_s, math.pi - 1e-9)
+        th = brentq(lambda t, gs=gs: wedge_function(t) - gs - 0.2, th_s, math.pi - 1e-9)
         assert secant_ratio(0.2, deg)[()] == pytest.approx(
             (math.cos(th_s) - math.cos(th)) / 0.2, rel=1e-4)
 
