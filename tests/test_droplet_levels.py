@@ -103,6 +103,23 @@ def test_convergence_script_reads_levels_from_an_earlier_json(tmp_path, capsys):
     with pytest.raises(SystemExit, match="speed 10.0 m/s, not 30"):
         conv.main(["30", "--out", str(out), "--levels", *map(str, levels),
                    "--t-end-tc", "4", "--figures-from", str(src)])
+    # a model variant (--override) is recorded in the file; a bad one is refused at once
+    out3 = tmp_path / "out3"
+    cox = ["--override", "fluid.contact_line=cox-voinov"]
+    with pytest.raises(SystemExit, match="run with --override"):  # the default's figures
+        conv.main(["10", "--out", str(out3), "--levels", *map(str, levels), "--t-end-tc",
+                   "4", "--figures-from", str(src), *cox])
+    src3 = tmp_path / "cox.json"
+    src3.write_text(json.dumps({"speed": 10.0, "levels": list(levels), "figures": figs,
+                                "overrides": [cox[1]]}))
+    conv.main(["10", "--out", str(out3), "--levels", *map(str, levels), "--t-end-tc", "4",
+               "--figures-from", str(src3), *cox])
+    res3 = json.loads((out3 / "convergence_V10.json").read_text())
+    assert res3["overrides"] == [cox[1]]
+    with pytest.raises(SystemExit):
+        conv.main(["10", "--out", str(out3), "--levels", *map(str, levels), "--t-end-tc",
+                   "4", "--figures-from", str(src3), "--override", "fluid.contact_line=sticky"])
+    assert "fluid.contact_line" in capsys.readouterr().err
 
 
     # the ensembles a --members run writes are read back member by member: the criteria of

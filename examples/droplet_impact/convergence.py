@@ -4,6 +4,7 @@
                                                   [--members K] [--member M ...]
                                                   [--t-end-tc T] [--figures-from JSON ...]
                                                   [--prune] [--no-run]
+                                                  [--override SECTION.KEY=VALUE ...]
 
 Runs the validation's scene (:func:`sphfem.validation.droplet_impact.scene_at`) at SPEED
 [m/s] and each level N (particles across the droplet; default: the case's own three,
@@ -28,6 +29,10 @@ from the members completed so far, with their counts.  ``--no-run`` runs nothing
 what has completed (a look at the state of running ensembles).  ``--prune`` deletes a completed
 run's particle and substrate VTU series (the checkpoint and ``summary.json`` stay; a D/dx
 181 level writes ~10 GB).
+
+``--override section.key=value`` (repeatable) sets a scene key in every run (a model
+variant, e.g. ``fluid.contact_line=cox-voinov``); the overrides are recorded in the JSON,
+not in the folder names, so each variant needs its own ``--out``.
 
 ``--figures-from`` takes the figures of levels run elsewhere (another machine, an earlier
 session whose run folders are gone) from an earlier ``convergence_V{SPEED}.json``: a level
@@ -61,15 +66,20 @@ def completed(folder: Path, speed: float, t_end_tc: float) -> dict | None:
     return None
 
 
-def earlier_figures(paths, speed: float, t_end_tc: float) -> dict[tuple, tuple[dict, str]]:
+def earlier_figures(paths, speed: float, t_end_tc: float,
+                    overrides=()) -> dict[tuple, tuple[dict, str]]:
     """(level, member) -> (figures, file) from earlier ``convergence_V*.json`` files of the
-    same speed and end time (a later file wins; a file without ``member_figures`` holds
-    member 0's); a file of another speed or end time is an error."""
+    same speed, end time and ``--override`` set (a later file wins; a file without
+    ``member_figures`` holds member 0's); a file of another speed, end time or model variant
+    is an error."""
     out: dict[tuple, tuple[dict, str]] = {}
     for path in paths:
         d = json.loads(Path(path).read_text())
         if not math.isclose(float(d["speed"]), speed):
             raise SystemExit(f"--figures-from {path}: speed {d['speed']} m/s, not {speed:g}")
+        if list(d.get("overrides", [])) != list(overrides):
+            raise SystemExit(f"--figures-from {path}: run with --override "
+                             f"{d.get('overrides', [])}, not {list(overrides)}")
         per_level = d.get("member_figures") or [{"0": f} for f in d["figures"]]
         for n, members in zip(d["levels"], per_level, strict=True):
             for m, f in members.items():
@@ -96,7 +106,8 @@ def prune(folder: Path) -> int:
     return freed
 
 
-def run_level(speed: float, n: int, t_end_tc: float, folder: Path, member: int = 0) -> dict:
+def run_level(speed: float, n: int, t_end_tc: float, folder: Path, member: int = 0,
+              overrides=()) -> dict:
     """The summary of one level's ensemble ``member``, run (or continued) when it has not
     completed."""
     from sphfem.api import run
@@ -106,7 +117,7 @@ def run_level(speed: float, n: int, t_end_tc: float, folder: Path, member: int =
     s = completed(folder, speed, t_end_tc)
     if s is not None:
         return s
-    d = di.scene_at(speed, n, t_end_tc, member=member)
+    d = di.scene_at(speed, n, t_end_tc, member=member, overrides=overrides)
     scene = parse_scene(d, source=f"convergence V={speed:g} D/dx={n} member {member}")
     resume = (folder / "checkpoint.npz").exists()
     # the checkpoint is kept, so a later, longer --t-end-tc continues the level
@@ -201,6 +212,9 @@ def main(argv=None) -> int:
                     help="run nothing: read the completed members (and --figures-from) only")
     ap.add_argument("--prune", action="store_true",
                     help="delete a completed run's VTU series (summary and checkpoint stay)")
+    ap.add_argument("--override", action="append", default=[], metavar="SECTION.KEY=VALUE",
+                    help="a scene key for every run (repeatable; di.apply_overrides), e.g. "
+                         "fluid.contact_line=cox-voinov; use a separate --out per set")
     a = ap.parse_args(argv)
 
     from sphfem.output import write_json
@@ -217,8 +231,16 @@ def main(argv=None) -> int:
         ap.error(f"--member must lie in [0, {a.members}) (--members {a.members}), "
                  f"got {a.member}")
     t_end = a.t_end_tc or di.t_end_for(a.speed)
+    from sphfem.errors import SceneError
+    from sphfem.scene import parse_scene
+
+    try:  # a bad override is refused before anything runs
+        parse_scene(di.scene_at(a.speed, levels[0], t_end, overrides=a.override),
+                    source="convergence.py --override")
+    except (SceneError, ValueError, KeyError, IndexError) as e:
+        ap.error(f"--override: {e}")
     a.out.mkdir(parents=True, exist_ok=True)
-    earlier = earlier_figures(a.figures_from, a.speed, t_end)
+    earlier = earlier_figures(a.figures_from, a.speed, t_end, a.override)
     figs, member_figs = [], []
     for n in levels:
         got: dict[int, dict] = {}
@@ -231,7 +253,7 @@ def main(argv=None) -> int:
             elif s is None and (a.no_run or (a.member and m not in a.member)):
                 continue  # not to be run here (another process's member, or --no-run)
             else:
-                s = s or run_level(a.speed, n, t_end, folder, m)
+                s = s or run_level(a.speed, n, t_end, folder, m, a.override)
                 f = di.figures(s, a.speed, 2.0 * next(
                     b for b in s["scene"]["blocks"] if b["kind"] == "fluid")["radius"])
                 if a.prune:
@@ -272,7 +294,7 @@ def main(argv=None) -> int:
         return {k: clean(v) for k, v in f.items()}
 
     write_json(a.out / f"convergence_V{a.speed:g}.json", {
-        "speed": a.speed, "levels": levels, "members": a.members,
+        "speed": a.speed, "levels": levels, "members": a.members, "overrides": a.override,
         "figures": [cleaned(f) for f in figs],
         "member_figures": [{str(m): cleaned(f) for m, f in g.items()} for g in member_figs],
         "criteria": {k: {"value": clean(float(c.value)), "limit": c.limit, "op": c.op,
