@@ -76,7 +76,25 @@ F_a dt, is removed from the particles with the weights (2):
     dE_i = sum_a w_ai F_a dt,   sum_i dE_i = sum_a F_a dt                                 (5)
 
 (sum_i w_ai = 1 on every wetted node; dry nodes exchange nothing), so the heat the fluid
-loses equals the heat the substrate gains to round-off.
+loses equals the heat the substrate gains to round-off.  Read literally, (5) takes a
+node's heat from its particles by their weights whatever their own temperatures: a
+particle already at the wall's temperature under a node whose mean is hotter loses its
+share and is cooled below the wall (the 10 m/s droplet job at D/dx 64 left contact-line
+rings 5-8 K below the 20 C substrate, 2026-12-07).  So the share follows each particle's
+own excess over the surface as well (:func:`removal`):
+
+    dE_i = sum_a F_a dt w_ai e_ai / sum_j w_aj e_aj,   e_ai = max(sgn(F_a) (T_i - T_s,a), 0)  (5')
+
+which is (5) when the node's particles share one temperature (the uniform-flux tiling
+above) and still sums to sum_a F_a dt.  A particle then loses at most dt sum_a w_ai hA_a
+(T_i - T_s,a) (F_a <= hA_a dt (T_f,a - T_s,a) and the node mean's excess is at most the
+sum of its positive parts), so it cannot cross the surface's temperature while
+
+    dt sum_a w_ai hA_a <= m_i c_i                                                       (5'')
+
+and when the caller passes the capacities m_i c_i the nodes' conductances are scaled
+down until (5'') holds (``capped`` counts the node-steps: a ring next to the axis, whose
+mass goes as r, under a strain spike).
 
 Wetting: node a becomes wetted when the contact layer's footprints cover at least
 ``wet_fraction`` (1/2) of it, sum_i B_ai >= wet_fraction A_a, and stays wetted while
@@ -305,6 +323,25 @@ def surface_divergence(yp, up, Y, radius: float, axisymmetric: bool = False,
     return out
 
 
+def removal(heat, rows, cols, w, T, Ts, n: int) -> np.ndarray:
+    """Eq. (5'): the heat each of ``n`` particles (temperatures ``T``) loses when the
+    surface nodes take in ``heat`` [J] (F_a dt; surface temperatures ``Ts`` at the end of
+    the step), given the weights ``w`` of the pairs (``rows`` node, ``cols`` particle):
+    node a's heat is shared in proportion to w_ai e_ai, e_ai = max(sgn(F_a) (T_i -
+    Ts_a), 0), each particle's own excess over the surface (by w_ai alone where no
+    particle of the node has any).  sum_i dE_i = sum_a F_a dt exactly."""
+    if rows.size == 0:
+        return np.zeros(n)
+    sgn = np.sign(heat[rows])
+    g = w * np.maximum(sgn * (T[cols] - Ts[rows]), 0.0)
+    G = np.bincount(rows, weights=g, minlength=heat.size)
+    W = np.bincount(rows, weights=w, minlength=heat.size)
+    use = G[rows] > 0.0
+    share = np.where(use, g / np.where(use, G[rows], 1.0), w / np.where(W[rows] > 0,
+                                                                          W[rows], 1.0))
+    return np.bincount(cols, weights=share * heat[rows], minlength=n)
+
+
 class ContactHeatInterface:
     """Fluid particles -> :class:`~sphfem.fem.heat_transient.TransientHeat` surface (module
     docstring).
@@ -378,6 +415,8 @@ class ContactHeatInterface:
         #: the fluid's temperature range, and the largest excess before the hold [K]
         self.held = 0
         self.held_excess_max = 0.0
+        #: node-steps whose conductance eq. (5'') capped
+        self.capped = 0
         self._phi_n = None
         self.last: dict = {}
         self._cache = None
@@ -564,12 +603,14 @@ class ContactHeatInterface:
         a[idx] = np.nan_to_num(div)
         return a
 
-    def step(self, x, T, vol, dt: float, h=None, v=None) -> np.ndarray:
+    def step(self, x, T, vol, dt: float, h=None, v=None, capacity=None) -> np.ndarray:
         """Exchange heat over ``dt`` between the particles (positions ``x`` (n, dim),
         temperatures ``T`` [K], volumes ``vol``, velocities ``v`` (n, dim), needed by the
         strained layer; fluid particles only) and the substrate, whose temperature it
         advances (one :meth:`TransientHeat.step`).  Returns the heat each particle loses
-        [J] (eq. 5): apply it as T_i -= dE_i / (m_i c_i)."""
+        [J] (eq. 5'): apply it as T_i -= dE_i / (m_i c_i).  ``capacity``: the particles'
+        m_i c_i [J/K]; with it the conductances are capped so that no particle can cross
+        the surface's temperature in the step (eq. 5'', "Conservation")."""
         T = np.asarray(T, float)
         if self.layer != "stagnant" and v is None:
             raise ValueError(f'ContactHeatInterface.step: layer = "{self.layer}" needs the '
@@ -628,9 +669,11 @@ class ContactHeatInterface:
         Ts0 = self.sub.surface_temperature()
         T_ext = np.where(wet, T_f, Ts0)
         self._hold_inferred(hA, T_ext, wet, Ts0, T)
+        if capacity is not None:
+            self._cap_conductance(hA, rows, cols, w, dt, capacity, len(T))
         heat = self.sub.step(dt, robin=(hA, T_ext))  # F_a dt per surface node [J]
         dry_heat = float(np.abs(heat[~wet]).sum())
-        dE = np.bincount(cols, weights=w * heat[rows], minlength=len(T))
+        dE = removal(heat, rows, cols, w, T, self.sub.surface_temperature(), len(T))
         self.heat_to_substrate += float(heat.sum())
         self.heat_from_fluid += float(dE.sum())
         self.t += dt
@@ -638,6 +681,23 @@ class ContactHeatInterface:
         self.last = {"wetted": int(wet.sum()), "T_fluid": T_f, "hA": hA,
                      "heat": heat, "dry_heat": dry_heat}
         return dE
+
+    def _cap_conductance(self, hA, rows, cols, w, dt, capacity, n: int) -> None:
+        """Eq. (5''): scale the conductances ``hA`` (in place) so that every particle's
+        dt sum_a w_ai hA_a <= m_i c_i (``capacity``, ``n`` particles); counted in
+        ``capped``."""
+        if rows.size == 0:
+            return
+        cap = np.broadcast_to(np.asarray(capacity, float), (n,))
+        load = np.bincount(cols, weights=dt * w * hA[rows], minlength=cap.size)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            over = np.where(load > cap, cap / load, 1.0)
+        if over.min() >= 1.0:
+            return
+        f = np.ones(hA.size)
+        np.minimum.at(f, rows, over[cols])
+        self.capped += int(np.sum(f < 1.0))
+        hA *= f
 
     def _hold_inferred(self, hA, T_ext, wet, Ts0, T) -> None:
         """Eq. (7): where the T_inf that eq. (3) infers from a wetted node's cell, T_wall +
@@ -665,6 +725,7 @@ class ContactHeatInterface:
         return {"steps": self.steps, "t": self.t,
                 "inferred_T_inf_held": self.held,
                 "inferred_T_inf_excess_max_K": self.held_excess_max,
+                "conductance_capped": self.capped,
                 "heat_to_substrate_J": self.heat_to_substrate,
                 "heat_from_fluid_J": self.heat_from_fluid,
                 "balance_rel": ((self.heat_from_fluid - self.heat_to_substrate)

@@ -315,8 +315,9 @@ class SubstrateHeat:
         t0 = time.perf_counter()
         dt = t - self.t_last
         x, vol = ps.x[f], ps.vol[f]
-        dE = self.itf.step(x, ps.T[f], vol, dt, h=self.dx, v=ps.v[f])
-        ps.T[f] -= dE / (ps.m[f] * ps.c_heat[f])
+        cap = ps.m[f] * ps.c_heat[f]
+        dE = self.itf.step(x, ps.T[f], vol, dt, h=self.dx, v=ps.v[f], capacity=cap)
+        ps.T[f] -= dE / cap
         self.t_last = t
         itf = self.itf
         wet = ~np.isnan(itf.t_wet)

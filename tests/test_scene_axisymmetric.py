@@ -523,3 +523,18 @@ def test_depth_counts_rings_over_the_floor_only():
     assert fluid._depth(s) < 0.0                  # past the edge: not counted
     s.x[rows[0]] = [0.5 * fluid._wall_r_max, fluid.wall_top - 1.5 * DX]
     assert fluid._depth(s) == pytest.approx(1.5)  # over the floor: counted
+
+
+def test_fluid_guards_stop_a_blown_up_ring(tmp_path):
+    """The fluid's guards (sphfem.fluid.guards) hold for the axisymmetric fluid too: a ring
+    faster than c0 stops the run with a message naming the guard (a 3 m/s impact at D/dx
+    64 had blown up to 3e5 m/s and 1e18 Pa at the wall and reported "completed")."""
+    data = droplet_scene(t_end="0.02 tc")
+    sim, s = run(data, tmp_path / "ok")
+    assert s["status"] == "completed"
+    data["blocks"][1]["velocity"] = [0.0, -600.0]  # c0 = 500 m/s
+    data["time"]["t_end"] = 1e-9
+    from sphfem.errors import SimulationStopped
+
+    with pytest.raises(SimulationStopped, match=r"step 1, .* speed above 1 c0 \(c0 = 500 m/s"):
+        run(data, tmp_path / "fast")
