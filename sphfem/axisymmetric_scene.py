@@ -398,6 +398,13 @@ class AxisymmetricFluidModule(PhysicsModule):
         floor = np.zeros(len(x), bool) if nrm is None else (kind == WALL) & (nrm[:, 1] > 0.5)
         walls = x[floor]
         self.dx = float(self.scene.sph.dx)
+        if self.sigma_st > 0.0:  # c0 against the capillary pressure at the kernel's scale
+            from sphfem.sound_speed import capillary_warning
+
+            text = capillary_warning(self.params.c0, self.sigma_st, self.params.rho0,
+                                     0.5 * ctx.R)
+            if text:
+                logger.warning("axisymmetric fluid: %s", text)
         self.wall_top = float(walls[:, 1].max()) + 0.5 * self.dx if len(walls) else None
         #: the floor's outer radius [m] (the spread cannot be measured beyond it)
         self._wall_r_max = (float(walls[:, 0].max()) + 0.5 * self.dx if len(walls)

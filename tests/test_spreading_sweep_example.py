@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import importlib.util
 import json
+import math
 from pathlib import Path
 
 import pytest
@@ -41,6 +42,10 @@ def test_scene_sets_we_and_re_and_only_the_fluid(study):
     assert rho * V * D / water["mu"] == pytest.approx(300.0)
     assert rho * V * V * D / water["sigma"] == pytest.approx(30.0)
     assert water["c0"] == pytest.approx(10 * V)
+    # at We 30, D/dx 87 the capillary pressure at the kernel's scale needs more than 10 V
+    water = study.scene_for(30.0, 1000.0, 87, 2.0)["materials"]["water"]
+    h = 1.5 * D / 87
+    assert water["c0"] == math.ceil(math.sqrt(water["sigma"] / (0.01 * rho * h))) > 10 * V
     assert d["physics"]["modules"] == ["fluid"] and "coupling" not in d and "heat" not in d
     assert s.sph.dx == pytest.approx(D / 24)
 

@@ -9,7 +9,9 @@
 A droplet (D = 0.1 mm, rho = 1000 kg/m^3, V = 10 m/s: the packaged axisymmetric scene of
 :mod:`sphfem.validation.droplet_impact`, fluid only) hits the flat wall; each case sets the
 liquid's viscosity and surface tension from (We, Re): mu = rho V D / Re, sigma = rho V^2 D /
-We (c0 = 10 V, the scene's artificial viscosity alpha and wall friction).  The spacing puts
+We (c0 = 10 V, or the capillary bound where larger:
+:func:`sphfem.validation.droplet_impact.sound_speed_for`; the scene's artificial
+viscosity alpha and wall friction).  The spacing puts
 three particles across the residual film of the spreading, h_res = 0.79 D Re^-0.4 (Roisman
 2009; :func:`sphfem.fluid.spreading.residual_film`), the rule under which the droplet
 study's figures settle (D/dx >= 3.8 Re^0.4: 24 at Re = 100, 61 at Re = 1000), and never
@@ -69,6 +71,7 @@ def scene_for(We: float, Re: float, n: int, t_end_tc: float, overrides=(),
     D, rho = 2.0 * drop["radius"], mat["rho0"]
     mat["mu"] = rho * SPEED * D / Re
     mat["sigma"] = rho * SPEED ** 2 * D / We
+    mat["c0"] = di.sound_speed_for(SPEED, mat, d)  # the capillary bound at low We
     d["physics"]["modules"] = ["fluid"]
     for section in ("coupling", "heat"):
         d.pop(section, None)

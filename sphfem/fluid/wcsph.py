@@ -333,6 +333,11 @@ class FluidSolver:
         if self.st_method is not None:
             self.st_constant, self.st_sigma = self.st_method.calibrate(pa, self.m_bar, self.R,
                                                                        self.dim)
+            from sphfem.sound_speed import capillary_warning
+
+            text = capillary_warning(pa.c0, float(self.st_sigma or 0.0), pa.rho0, 0.5 * self.R)
+            if text:
+                logger.warning("fluid: %s", text)
 
     @property
     def p(self) -> ParticleSet:

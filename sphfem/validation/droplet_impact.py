@@ -170,9 +170,25 @@ def levels_for(speed: float, scene=None) -> tuple[int, int, int]:
                      f"more than D/dx = {LADDER[-1]} for {MIN_FILM_PARTICLES:g} particles")
 
 
+def sound_speed_for(speed: float, material: dict, d: dict) -> float:
+    """c0 of a level [m/s]: 10 x the impact ``speed`` (Mach 0.1), or the capillary bound
+    of the level's kernel scale h = R / 2 when that is larger
+    (:func:`sphfem.sound_speed.capillary_sound_speed`: low Weber numbers; the 10, 30 and
+    50 m/s levels up to D/dx 181 / 256 keep 10 V).  ``material`` and ``d``: the droplet's
+    material and the scene dict (its ``sph.dx``, ``sph.support_factor``)."""
+    from sphfem.sound_speed import capillary_sound_speed
+
+    c0 = 10.0 * float(speed)
+    sigma = material.get("sigma")
+    if sigma and d.get("fluid", {}).get("surface_tension", "none") != "none":
+        h = 0.5 * d["sph"]["support_factor"] * d["sph"]["dx"]
+        c0 = max(c0, float(math.ceil(capillary_sound_speed(sigma, material["rho0"], h))))
+    return c0
+
+
 def scene_at(speed: float, per_diameter: int, t_end_tc: float, *,
              wall_radius: float | None = None, overrides=(), member: int = 0) -> dict:
-    """The scene dict at impact speed ``speed`` (c0 = 10 speed), ``per_diameter``
+    """The scene dict at impact speed ``speed`` (c0: :func:`sound_speed_for`), ``per_diameter``
     particles across the droplet, ending at ``t_end_tc`` t_c.  ``wall_radius`` [m] widens
     the SPH wall, the domain and the lateral heat refinement to that radius;
     ``overrides``: ``"section.key=value"`` strings (the value a Python literal, else the
@@ -189,7 +205,8 @@ def scene_at(speed: float, per_diameter: int, t_end_tc: float, *,
     drop = next(b for b in d["blocks"] if b["kind"] == "fluid")
     v = [0.0] * (len(drop["velocity"]) - 1) + [-float(speed)]
     drop["velocity"] = v
-    d["materials"][drop["material"]]["c0"] = 10.0 * float(speed)
+    mat = d["materials"][drop["material"]]
+    mat["c0"] = sound_speed_for(speed, mat, d)
     d["time"]["t_end"] = f"{t_end_tc} tc"
     d["output"]["every"] = f"{OUTPUT_EVERY_TC:g} tc"
     # the late spreading is chaotic: landing the steps on the output times would make the
