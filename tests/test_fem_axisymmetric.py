@@ -68,10 +68,14 @@ def lame_errors(mesh, element):
 
 
 @pytest.mark.parametrize("element, hs", [("P1", (0.05, 0.025, 0.0125)),
-                                         ("P2", (0.2, 0.1, 0.05))])
+                                         ("P2", (0.1, 0.05, 0.025))])
 def test_lame_unstructured_triangles_orders(element, hs):
     """gmsh triangles of size h (measured as sqrt(area / vertices)): L2(u) order
-    >= p + 1 - 0.15, L2(sigma) >= p - 0.15."""
+    >= p + 1 - 0.15, L2(sigma) >= p - 0.15.  P2 from h = 0.1 (75-79 vertices), not 0.2
+    (28, pre-asymptotic): gmsh's mesh of one recipe depends on what the process meshed
+    before (state that outlives finalize(); 75 or 79 vertices at h = 0.1), and one CI run's
+    draw gave orders 2.60 / 4.31 on (0.2, 0.1, 0.05); on (0.1, 0.05, 0.025) both draws give
+    3.17-3.56 (u) and 2.12-2.24 (sigma)."""
     p = int(element[1])
     eu, es, hh = [], [], []
     for h in hs:
