@@ -218,7 +218,8 @@ class AxisymmetricFluidModule(PhysicsModule):
     #: the records a resumed run continues (the spread history, the walls' impulse since
     #: t = 0, the deepest ring, the breach time; the solver state is in the particles)
     checkpoint_attrs = ("spread", "mom0", "impulse", "t0", "max_depth", "t_breach",
-                        "correction_impulse", "_next_spread", "spread_every", "t_escape")
+                        "correction_impulse", "_next_spread", "spread_every", "t_escape",
+                        "rho_ratio_extremes")
     moves_particles = False  # it moves the fluid, but with its own list (module docstring)
     #: a ring deeper than this [dx] below the wall top has entered the second wall layer:
     #: its time is reported (``t_wall_breach_s``); one below the wall stops the run
@@ -333,6 +334,10 @@ class AxisymmetricFluidModule(PhysicsModule):
         self.t_breach = None
         #: the first time a fluid ring was outside the domain box (None: never)
         self.t_escape = None
+        #: the active rings' lowest and highest rho / rho0 over the run and their times
+        #: ([min, t_min, max, t_max]; None before the first step; reported, and bounded
+        #: by the guard's band)
+        self.rho_ratio_extremes = None
         #: the domain box's corners
         self._domain = (np.asarray(scene.domain.lo, float), np.asarray(scene.domain.hi, float))
 
@@ -551,6 +556,16 @@ class AxisymmetricFluidModule(PhysicsModule):
         from sphfem.fluid.guards import check_fluid
 
         s, pa = self.solver, self.params
+        if s.fluid.any():
+            ratio = s.rho[s.fluid] / pa.rho0
+            lo, hi = float(ratio.min()), float(ratio.max())
+            if self.rho_ratio_extremes is None:
+                self.rho_ratio_extremes = [lo, t, hi, t]
+            ext = self.rho_ratio_extremes
+            if lo < ext[0]:
+                ext[0], ext[1] = lo, t
+            if hi > ext[2]:
+                ext[2], ext[3] = hi, t
         kind = np.where(s.fluid, FLUID, -1).astype(np.int8)
         inf = np.full(2, np.inf)
         check_fluid(s.x, s.v, s.rho, kind, -inf, inf, np.zeros(2),
@@ -690,6 +705,9 @@ class AxisymmetricFluidModule(PhysicsModule):
         # fraction and the first time, so a splash that left the region is visible
         lo, hi = self._domain
         out = fl & ((ps.x < lo) | (ps.x > hi)).any(axis=1)
+        ext = self.rho_ratio_extremes or [None] * 4
+        d["density_ratio"] = {"min": ext[0], "t_min_s": ext[1], "max": ext[2],
+                              "t_max_s": ext[3], "guard_band": list(self.params.rho_ratio_band)}
         d["rings_outside_domain"] = {"count": int(out.sum()),
                                      "mass_fraction": float(ps.m[out].sum() / ps.m[fl].sum()),
                                      "t_first_s": self.t_escape}

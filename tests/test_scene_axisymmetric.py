@@ -532,6 +532,12 @@ def test_fluid_guards_stop_a_blown_up_ring(tmp_path):
     data = droplet_scene(t_end="0.02 tc")
     sim, s = run(data, tmp_path / "ok")
     assert s["status"] == "completed"
+    dr = s["diagnostics"]["fluid"]["density_ratio"]  # the active rings' extremes, reported
+    fl = sim.particles.kind == FLUID
+    assert dr["guard_band"] == [0.8, 1.25]
+    assert 0.8 <= dr["min"] <= sim.particles.rho[fl].min() / 1000.0 + 1e-12
+    assert dr["max"] >= sim.particles.rho[fl].max() / 1000.0 - 1e-12
+    assert 0.0 < dr["t_max_s"] <= s["t"]
     data["blocks"][1]["velocity"] = [0.0, -600.0]  # c0 = 500 m/s
     data["time"]["t_end"] = 1e-9
     from sphfem.errors import SimulationStopped

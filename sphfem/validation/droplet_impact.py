@@ -3,7 +3,8 @@
 The scene is the packaged axisymmetric droplet impact (``sphfem/scenes/droplet_impact_
 axisymmetric.toml``: water D = 0.1 mm at 100 C onto alumina at 20 C, fluid + ring heat +
 fem-contact substrate heat + fem-axisymmetric stress), run at each impact speed V (c0 =
-10 V, so the Mach number and the steps per t_c stay fixed) at three spacings dx (every
+10 V, so the Mach number and the steps per t_c stay fixed, or the capillary bound of the
+level where that is larger: :func:`sound_speed_for`) at three spacings dx (every
 resolution length scaled together, :func:`sphfem.resolution.scaled_resolution`; the SPH
 wall kept one kernel support deep): the finest puts three particles across the residual
 film of the spreading (:func:`levels_for`), and the runs end past the maximum spreading
