@@ -553,6 +553,7 @@ class AxisymmetricFluidModule(PhysicsModule):
         is counted, not stopped (``rings_outside_domain``).  Before 2026-12-07 the
         axisymmetric fluid had none: a 3 m/s impact (We 12, D/dx 64) blew up to 3e5 m/s
         and 1e18 Pa at the wall and still reported ``completed``."""
+        from sphfem.errors import SimulationStopped
         from sphfem.fluid.guards import check_fluid
 
         s, pa = self.solver, self.params
@@ -568,8 +569,24 @@ class AxisymmetricFluidModule(PhysicsModule):
                 ext[2], ext[3] = hi, t
         kind = np.where(s.fluid, FLUID, -1).astype(np.int8)
         inf = np.full(2, np.inf)
-        check_fluid(s.x, s.v, s.rho, kind, -inf, inf, np.zeros(2),
-                    pa.c0, pa.rho0, pa.max_speed_factor, pa.rho_ratio_band, s.step_count, t)
+        try:
+            check_fluid(s.x, s.v, s.rho, kind, -inf, inf, np.zeros(2),
+                        pa.c0, pa.rho0, pa.max_speed_factor, pa.rho_ratio_band,
+                        s.step_count, t)
+        except SimulationStopped as e:  # say where: the axis and the wall are the suspects
+            rows = np.flatnonzero(s.fluid)
+            ratio = s.rho[rows] / pa.rho0
+            dev = np.maximum(ratio / pa.rho_ratio_band[1], pa.rho_ratio_band[0] / ratio)
+            speed = np.sqrt((s.v[rows] ** 2).sum(axis=1)) / (pa.max_speed_factor * pa.c0)
+            bad = np.where(np.isfinite(dev) & np.isfinite(speed), np.maximum(dev, speed),
+                           np.inf)
+            i = rows[int(np.argmax(bad))]
+            z0 = self.wall_top if self.wall_top is not None else 0.0
+            raise SimulationStopped(
+                f"{e} [the worst ring: r = {s.x[i, 0] / self.dx:.3g} dx from the axis, "
+                f"z = {(s.x[i, 1] - z0) / self.dx:.3g} dx above the wall top, "
+                f"rho/rho0 = {s.rho[i] / pa.rho0:.4g}, |v| = "
+                f"{float(np.hypot(*s.v[i])):.4g} m/s]") from None
 
     def _depth(self, s) -> float:
         """How far the lowest fluid ring over the floor lies below the floor's top [dx]
