@@ -329,16 +329,14 @@ def removal(heat, rows, cols, w, T, Ts, n: int) -> np.ndarray:
     the step), given the weights ``w`` of the pairs (``rows`` node, ``cols`` particle):
     node a's heat is shared in proportion to w_ai e_ai, e_ai = max(sgn(F_a) (T_i -
     Ts_a), 0), each particle's own excess over the surface (by w_ai alone where no
-    particle of the node has any).  sum_i dE_i = sum_a F_a dt exactly."""
+    particle of the node has any; the weights sum to 1 over each node, as
+    :meth:`ContactHeatInterface.weights` returns them).  sum_i dE_i = sum_a F_a dt
+    exactly."""
     if rows.size == 0:
         return np.zeros(n)
-    sgn = np.sign(heat[rows])
-    g = w * np.maximum(sgn * (T[cols] - Ts[rows]), 0.0)
-    G = np.bincount(rows, weights=g, minlength=heat.size)
-    W = np.bincount(rows, weights=w, minlength=heat.size)
-    use = G[rows] > 0.0
-    share = np.where(use, g / np.where(use, G[rows], 1.0), w / np.where(W[rows] > 0,
-                                                                          W[rows], 1.0))
+    g = w * np.maximum(np.sign(heat[rows]) * (T[cols] - Ts[rows]), 0.0)
+    G = np.bincount(rows, weights=g, minlength=heat.size)[rows]
+    share = np.where(G > 0.0, g / np.where(G > 0.0, G, 1.0), w)
     return np.bincount(cols, weights=share * heat[rows], minlength=n)
 
 

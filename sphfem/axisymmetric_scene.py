@@ -80,6 +80,11 @@ __all__ = ["AxisymmetricFluidModule", "AxisymmetricHeatModule", "build_ring_part
 TWO_PI = 2.0 * math.pi
 
 
+#: the guards' domain box in (r, z): none (a ring outside the scene's box is counted, not
+#: stopped), no periodic axis
+_NO_BOX_LO, _NO_BOX_HI, _NO_PERIOD = np.full(2, -np.inf), np.full(2, np.inf), np.zeros(2)
+
+
 def is_axisymmetric(scene) -> bool:
     return getattr(scene, "geometry", "cartesian") == "axisymmetric"
 
@@ -567,10 +572,8 @@ class AxisymmetricFluidModule(PhysicsModule):
                 ext[0], ext[1] = lo, t
             if hi > ext[2]:
                 ext[2], ext[3] = hi, t
-        kind = np.where(s.fluid, FLUID, -1).astype(np.int8)
-        inf = np.full(2, np.inf)
-        try:
-            check_fluid(s.x, s.v, s.rho, kind, -inf, inf, np.zeros(2),
+        try:  # the solver's kind is FLUID on the active rings only (inert: INERT)
+            check_fluid(s.x, s.v, s.rho, s.kind, _NO_BOX_LO, _NO_BOX_HI, _NO_PERIOD,
                         pa.c0, pa.rho0, pa.max_speed_factor, pa.rho_ratio_band,
                         s.step_count, t)
         except SimulationStopped as e:  # say where: the axis and the wall are the suspects
