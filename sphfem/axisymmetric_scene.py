@@ -294,7 +294,7 @@ class AxisymmetricFluidModule(PhysicsModule):
         "kernel", "wall_normals", "smooth_hoop", "no_penetration", "surface_tension",
         "shifting", "shift_surface", "shift_speed", "skin", "shift_surface_lambda",
         "shift_drift", "wall_friction", "film_tension", "axis_floor", "stress_plane",
-        "contact_line_slip", "contact_line_slip_length",
+        "contact_line_slip", "contact_line_slip_length", "wall_slip", "slip_length",
         "csf_meridian"})
     #: rings are kept at r >= AXIS_FLOOR_DX dx (the fluid's spacing; the lattice's first
     #: column sits at dx / 2): next to the axis a ring's meridian area grows as 1 / r and its
@@ -389,6 +389,7 @@ class AxisymmetricFluidModule(PhysicsModule):
             contact_line_slip_length=(self.scene.fluid.contact_line_slip_length
                                       if self.scene.fluid.contact_line == "cox-voinov"
                                       else 0.0),
+            wall_slip=self.scene.fluid.wall_slip, slip_length=self.scene.fluid.slip_length,
             axis_floor=self.AXIS_FLOOR_DX * float(dxf[0]),
             stress_plane=self._wall_top(x, kind, A), **self._options())
         self.nrm = nrm

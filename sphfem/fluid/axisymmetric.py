@@ -748,6 +748,10 @@ class AxisymmetricFluid:
     wall pairs; needs ``wall_normals``) or "none" (free slip: neither term on wall pairs; the
     walls push only through the pressure, e.g. for the dewetting check of
     ``examples/axisymmetric/taylor_culick.py --wall``).
+    ``wall_slip`` ("no-slip", "free-slip" or "navier" with ``slip_length`` b [m];
+    ``wall_friction = "viscous"``): the tangential part of the walls' ghost velocity in the
+    viscous terms follows a Navier slip (:mod:`sphfem.fluid.axisymmetric_wall_slip`); the
+    continuity's divergence keeps Adami's ghost.
 
     ``planar=True``: plain 2D SPH in the (x, y) = (r, z) plane with a symmetry plane at
     x = 0 (the same mirrors), ``M`` then the planar masses [kg/m]: no hoop terms, A = M / rho
@@ -826,7 +830,8 @@ class AxisymmetricFluid:
                  shift_surface_lambda: float = 0.75, shift_drift: str = "kept",
                  axis_floor: float = 0.0, stress_plane: float | None = None,
                  bulk_damping: float = 0.0, debris_rings: int = 0,
-                 contact_line_slip: bool = False, contact_line_slip_length: float = 0.0):
+                 contact_line_slip: bool = False, contact_line_slip_length: float = 0.0,
+                 wall_slip: str = "no-slip", slip_length: float = 0.0):
         self.x = np.array(x, dtype=np.float64)
         n = self.n = self.x.shape[0]
         self.v = np.array(v, dtype=np.float64).reshape(n, 2)
@@ -972,6 +977,24 @@ class AxisymmetricFluid:
                              f"{wall_friction!r}")
         #: "sph", "viscous", "layer" or "none" (class docstring)
         self.wall_friction = wall_friction
+        from sphfem.fluid.axisymmetric_wall_slip import MODES as SLIP_MODES
+
+        if wall_slip not in SLIP_MODES:
+            raise ValueError(f"wall_slip must be one of {sorted(SLIP_MODES)}, got "
+                             f"{wall_slip!r}")
+        if not (slip_length >= 0.0 and math.isfinite(slip_length)):
+            raise ValueError(f"slip_length must be a finite length >= 0, got {slip_length!r}")
+        if wall_slip == "navier" and not slip_length > 0.0:
+            raise ValueError("wall_slip = 'navier' needs slip_length > 0 (the slip length b "
+                             "[m]; 0 is no slip)")
+        if wall_slip != "no-slip" and wall_friction != "viscous":
+            raise ValueError(f"wall_slip = {wall_slip!r} acts on the plain viscous wall term: "
+                             f"it needs wall_friction = 'viscous', got {wall_friction!r}")
+        #: the walls' slip in the viscous term (0 no slip, 1 free, 2 Navier with
+        #: ``slip_length``; :mod:`sphfem.fluid.axisymmetric_wall_slip`)
+        self.slip_mode = SLIP_MODES[wall_slip]
+        #: Navier slip length b [m] (``wall_slip = "navier"``)
+        self.slip_length = float(slip_length)
         wl = self.kind == WALL
         #: per-row factor of the wall pairs' viscous term (sphfem.fluid.wall_layer, eq. 3;
         #: 0 for a free-slip wall)
@@ -1160,6 +1183,13 @@ class AxisymmetricFluid:
         if self.wall_tension in ("bulk", "contact-line"):
             _clip_surface_walls(x, p, rho, kind, nl.offsets, nl.indices, Rp, self.Lz,
                                 self._clip_weights(src, m), pa.rho0, self.B, pa.gamma)
+        vga = vg  # Adami's ghost: the continuity's free-slip ghost is built from it
+        if self.slip_mode:  # the viscous terms see the wall's slip
+            from sphfem.fluid.axisymmetric_wall_slip import slip_ghost_rz
+
+            vga = vg.copy()
+            slip_ghost_rz(x, v, vg, kind, nl.offsets, nl.indices, Rp, self.kcode, self.Lz,
+                          self.slip_mode, self.slip_length)
         mt[:n] = rho[:n] * A[:n]
         _fill_mirrors(n, src, mtype, zw, self.gravity[1], x, v, vg, rho, p, A, mt, mu, gr, dvdr,
                       Rp)
@@ -1187,7 +1217,7 @@ class AxisymmetricFluid:
             p[:n][fl] += (self.bulk_damping * 0.5 * self.Rp[fl] * pa.c0) * self.drho[fl]
         _fill_mirrors(n, src, mtype, zw, self.gravity[1], x, v, vg, rho, p, A, mt, mu, gr, dvdr,
                       Rp)
-        vd = self._divergence_velocity(v, vg, src, mtype)
+        vd = self._divergence_velocity(v, vga, src, mtype)
         acc = np.zeros((m, 2))
         drho = np.zeros(m)
         gradv = np.zeros((m, 4))

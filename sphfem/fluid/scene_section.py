@@ -49,6 +49,11 @@ def _check(rec, ctx, path):
     if rec.contact_line != "no-slip" and rec.wall_friction != "layer":
         ctx.error(f"{path}.contact_line", f"contact_line = \"{rec.contact_line}\" is a model "
                   "of the wall layer's friction: it needs wall_friction = \"layer\"")
+    if (getattr(meta, "geometry", None) == "axisymmetric" and rec.walls == "adami2012"
+            and rec.wall_slip != "no-slip" and rec.wall_friction != "viscous"):
+        ctx.error(f"{path}.wall_slip", f"wall_slip = \"{rec.wall_slip}\" in an axisymmetric "
+                  "scene acts on the plain viscous wall term: it needs wall_friction = "
+                  f"\"viscous\" (got \"{rec.wall_friction}\")")
     if rec.film_tension and getattr(meta, "geometry", None) != "axisymmetric":
         ctx.error(f"{path}.film_tension", "film_tension is implemented for geometry = "
                   "\"axisymmetric\" only")

@@ -43,7 +43,9 @@ def slip_params(when: tuple) -> tuple:
                   "(sphfem.fluid.wall_slip): no-slip = Adami's mirrored ghost velocity; "
                   "free-slip = the fluid's tangential velocity (du_t/dn = 0); navier = "
                   "slip length `slip_length` (u_t = b du_t/dn); the normal component stays "
-                  "mirrored (no penetration).  A moving contact line needs slip"),
+                  "mirrored (no penetration).  A moving contact line needs slip.  "
+                  "Axisymmetric scenes: with wall_friction = \"viscous\" "
+                  "(sphfem.fluid.axisymmetric_wall_slip)"),
         Param("slip_length", float, 0.0, unit="m", ge=0.0, quantity="length", when=when,
               doc="Navier slip length b [m] of wall_slip = \"navier\" (0: no slip)"),
     )
