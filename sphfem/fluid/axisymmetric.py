@@ -1356,6 +1356,11 @@ class AxisymmetricFluid:
             lim["bulk"] = pa.visc_cfl * h**2 / (self.bulk_damping * hb * pa.c0)
         if amax > 0:
             lim["force"] = pa.force_cfl * math.sqrt(h / amax)
+        if pa.density_cfl > 0.0 and self._fidx.size:  # [fluid] density_cfl
+            f = self._fidx
+            rate = float(np.max(np.abs(self.drho[f]) / self.rho[f]))
+            if rate > 0.0:
+                lim["density"] = pa.density_cfl / rate
         return lim
 
     def stable_dt(self) -> float:

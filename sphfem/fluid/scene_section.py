@@ -156,6 +156,12 @@ FLUID = Section("fluid", (
               "dt <= cfl h/(c0 + |v|max) uses `[time] cfl`)"),
     Param("force_cfl", float, 0.25, gt=0.0, le=1.0,
           doc="force limit dt <= force_cfl sqrt(h/|a|max)"),
+    Param("density_cfl", float, 0.0, ge=0.0, le=1.0,
+          doc="density-rate limit dt <= density_cfl min(rho / |D rho / D t|) over the fluid "
+              "(0 = off): no particle's density changes by more than this fraction in a "
+              "step.  It binds only in singular events (a cavity or a ring collapsing onto "
+              "the axis of an axisymmetric run, whose hoop compression v_r / r is not bounded "
+              "by the acoustic limit); 0.02 in the packaged axisymmetric droplet scenes"),
     Param("eps_visc", float, 1e-3, positive=True,
           doc="regulariser of the viscous term, as a fraction of h^2"),
     Param("cond_max", float, 1e8, gt=1.0,

@@ -25,7 +25,8 @@ predictor-corrector form of DualSPHysics, one force evaluation per step, second 
 Time-step limits (h = R/2), each reported by name: acoustic ``cfl h / (c0 + |v|max)`` (a
 pressure projection, IISPH / DFSPH: ``cfl h / |v|max`` instead, named cfl),
 viscous ``visc_cfl h^2 min(rho/mu)`` (not with an implicit viscosity model: it asks the
-model's ``implicit``), force ``force_cfl sqrt(h / |a|max)``.
+model's ``implicit``), force ``force_cfl sqrt(h / |a|max)``, density ``density_cfl
+min(rho / |D rho / D t|)`` (``[fluid] density_cfl``; off by default).
 
 Neighbours: the context's list (:class:`~sphfem.context.StepContext`), asked for after every
 drift; stand-alone, the Verlet list of :mod:`sphfem.fluid.standalone` (radius R (1 + skin),
@@ -496,6 +497,12 @@ class FluidSolver:
             lim["viscous"] = pa.visc_cfl * self.h * self.h * rho_mu
         if amax > 0:
             lim["force"] = pa.force_cfl * math.sqrt(self.h / amax)
+        if pa.density_cfl > 0.0:  # [fluid] density_cfl
+            fl = p.kind == FLUID
+            if fl.any():
+                rate = float(np.max(np.abs(p.drho[fl]) / p.rho[fl]))
+                if rate > 0.0:
+                    lim["density"] = pa.density_cfl / rate
         if pa.surface_tension != "none" and self.st_sigma > 0:  # Brackbill et al. (1992)
             lim["capillary"] = 0.25 * math.sqrt(pa.rho0 * self.h**3
                                                 / (2 * math.pi * self.st_sigma))
