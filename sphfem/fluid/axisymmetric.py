@@ -109,6 +109,8 @@ from sphfem.fluid.axisymmetric_surface_tension import (
     mirror_normals,
     mirror_scalar,
 )
+from sphfem.fluid.axisymmetric_wall_slip import MODES as SLIP_MODES
+from sphfem.fluid.axisymmetric_wall_slip import slip_ghost_rz
 from sphfem.fluid.eos import tait_B, tait_density, tait_pressure
 from sphfem.fluid.no_penetration import NoPenetration
 from sphfem.fluid.wcsph import FluidParams
@@ -977,8 +979,6 @@ class AxisymmetricFluid:
                              f"{wall_friction!r}")
         #: "sph", "viscous", "layer" or "none" (class docstring)
         self.wall_friction = wall_friction
-        from sphfem.fluid.axisymmetric_wall_slip import MODES as SLIP_MODES
-
         if wall_slip not in SLIP_MODES:
             raise ValueError(f"wall_slip must be one of {sorted(SLIP_MODES)}, got "
                              f"{wall_slip!r}")
@@ -1185,8 +1185,6 @@ class AxisymmetricFluid:
                                 self._clip_weights(src, m), pa.rho0, self.B, pa.gamma)
         vga = vg  # Adami's ghost: the continuity's free-slip ghost is built from it
         if self.slip_mode:  # the viscous terms see the wall's slip
-            from sphfem.fluid.axisymmetric_wall_slip import slip_ghost_rz
-
             vga = vg.copy()
             slip_ghost_rz(x, v, vg, kind, nl.offsets, nl.indices, Rp, self.kcode, self.Lz,
                           self.slip_mode, self.slip_length)

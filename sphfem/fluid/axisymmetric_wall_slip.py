@@ -27,13 +27,10 @@ import math
 from numba import njit, prange
 
 from sphfem import kernels
+from sphfem.axisymmetric import MIRROR_FLUID
+from sphfem.fluid.wall_slip import MODES  # noqa: F401  (the ``wall_slip`` choices -> mode)
 from sphfem.neighbors import min_image
 from sphfem.particles import FLUID, WALL
-
-#: the ``wall_slip`` choices -> mode of :func:`slip_ghost_rz`
-MODES = {"no-slip": 0, "free-slip": 1, "navier": 2}
-
-_MIRROR_FLUID = 4  # sphfem.axisymmetric.MIRROR_FLUID (not imported: no cycle)
 
 
 @njit(cache=True, parallel=True)
@@ -50,7 +47,7 @@ def slip_ghost_rz(x, v, vg, kind, offsets, indices, Rp, kcode, Lz, mode, b):
         d1 = 0.0
         for jj in range(offsets[i], offsets[i + 1]):
             j = indices[jj]
-            if kind[j] != FLUID and kind[j] != _MIRROR_FLUID:
+            if kind[j] != FLUID and kind[j] != MIRROR_FLUID:
                 continue
             r0 = x[i, 0] - x[j, 0]
             r1 = min_image(x[i, 1] - x[j, 1], Lz)
