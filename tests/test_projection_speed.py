@@ -4,7 +4,7 @@
   renormalised density gradient (:func:`sphfem.fluid.passes.density_gradient`) is not
   computed (it feeds only ``drho``, which the projection does not use; the density is a
   summation there), while the accelerations stay bit-identical; WCSPH still computes it;
-* the DFSPH divergence solve's warm start (off by default): half the last step's dt kappa^v
+* the DFSPH divergence solve's warm start (default 0.5): half the last step's dt kappa^v
   by particle id, independent of the new dt, applied only where the flow compresses.
 """
 
@@ -64,18 +64,18 @@ def test_wcsph_still_computes_the_density_gradient(monkeypatch):
     assert calls
 
 
-def test_dfsph_divergence_warm_start_is_half_the_last_velocity_change(monkeypatch):
-    """The divergence solve's warm start (off by default; see the module docstring) takes
+def test_dfsph_divergence_warm_start_is_half_the_last_velocity_change():
+    """The divergence solve's warm start (default 0.5; see the module docstring) takes
     half of the last step's kappa^v (Bender & Koschier 2017; SPlisHSPlasH's
     warmstartDivergenceSolve), looked up by particle id and kept as dt kappa^v: the velocity
-    change it applies does not depend on the new step's dt, and only particles whose flow
-    compresses (D_i > 0) get it."""
+    change it applies does not depend on the new step's dt; only particles whose flow
+    compresses (D_i > 0) carry a warm q^v, and the change conserves momentum (fluid and
+    walls' reaction)."""
     from sphfem.fluid import pressure_dfsph_bender2017 as dfsph
     from sphfem.fluid import projection
-    from sphfem.particles import FLUID
+    from sphfem.particles import FLUID, WALL
 
-    monkeypatch.setattr(dfsph, "WARM_FRACTION_DIVERGENCE", 0.5)
-    s = _solver("dfsph")
+    s = _solver("dfsph", dfsph_divergence_warm_start=0.5)
     for _ in range(4):
         s.step(2e-3)
     st = s.pressure_state
@@ -85,14 +85,21 @@ def test_dfsph_divergence_warm_start_is_half_the_last_velocity_change(monkeypatc
     assert stored[fl].max() > 0.0 and stored.min() >= 0.0  # compressed somewhere, clamped
     v0 = s.p.v.copy()
     projection.density_rate(v0, w.M, s.p.kind, s.nbrs.offsets, w.nbj, w.grad, w.cnt, w.rate)
-    expanding = fl & (w.rate <= 0.0)
+    comp = fl & (w.rate > 0.0)
+    assert comp.any() and (fl & ~comp).any()
     dv = []
     for dt in (1e-3, 3e-3):
         s.p.v[:] = v0
         dfsph.warm_start_divergence(s, st, w, dt)
-        expect = 0.5 * stored[fl] / (dt * w.rho[fl])
-        assert np.allclose(w.Qv[fl], expect, rtol=1e-14, atol=0.0)
+        expect = np.zeros(s.p.n)
+        expect[comp] = 0.5 * stored[comp] / (dt * w.rho[comp])
+        assert np.allclose(w.Qv[fl], expect[fl], rtol=1e-14, atol=0.0)
         dv.append(s.p.v - v0)
-    assert np.abs(dv[0]).max() > 0.0 and expanding.any()
-    assert not dv[0][expanding].any()
+        # momentum: the fluid's change is the negative of the walls' reaction
+        f = np.zeros_like(s.p.v)
+        projection.wall_reaction(w.Qv, s.p.m, w.M, s.p.kind, s.nbrs.offsets, w.nbj, w.grad,
+                                 w.cnt, f)
+        mom = (s.p.m[fl, None] * dv[-1][fl]).sum(0) / dt + f[s.p.kind == WALL].sum(0)
+        assert np.abs(mom).max() < 1e-10 * np.abs(s.p.m[fl, None] * dv[-1][fl]).sum() / dt
+    assert np.abs(dv[0]).max() > 0.0
     assert np.allclose(dv[0], dv[1], rtol=1e-12, atol=1e-15 * np.abs(dv[0]).max())

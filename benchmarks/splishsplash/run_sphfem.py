@@ -50,7 +50,7 @@ def block_positions(radius: float) -> np.ndarray:
 
 
 def build(method: str, radius: float, tol: float, tol_v: float, kernel: str,
-          support: float, threads: int):
+          support: float, threads: int, extra: dict | None = None):
     """The solver of the scene (fluid at rest at rho0 with the hydrostatic pressure as the
     first solve's start)."""
     from sphfem.fluid import FluidParams, FluidSolver
@@ -65,6 +65,7 @@ def build(method: str, radius: float, tol: float, tol_v: float, kernel: str,
     R = support * d
     keys = {"dfsph": {"dfsph_tolerance": tol, "dfsph_divergence_tolerance": tol_v},
             "iisph": {"iisph_tolerance": tol}}[method]
+    keys.update(extra or {})
     par = FluidParams(rho0=rho0, mu=rho0 * NU, gravity=(0.0, 0.0, -g), pressure=method,
                       cfl=CFL_DIAMETERS * d / (0.5 * R), threads=threads, **keys)
     m = 4 * d
@@ -97,11 +98,18 @@ def main(argv=None) -> int:
     ap.add_argument("--support", type=float, default=3.0, help="R / (2 r)")
     ap.add_argument("--threads", type=int, default=int(os.environ.get("NUMBA_NUM_THREADS", 2)))
     ap.add_argument("--no-warmup", action="store_true")
+    ap.add_argument("--set", nargs="*", default=[], metavar="KEY=VALUE",
+                    help="further FluidParams keys (e.g. dfsph_deficient_fraction=0.75)")
     a = ap.parse_args(argv)
 
     from sphfem.particles import FLUID
 
-    args = (a.method, a.radius, a.max_error, a.max_error_v, a.kernel, a.support, a.threads)
+    extra = {}
+    for kv in a.set:
+        k, v = kv.split("=", 1)
+        extra[k] = float(v) if any(c in v for c in ".e") else int(v)
+    args = (a.method, a.radius, a.max_error, a.max_error_v, a.kernel, a.support, a.threads,
+            extra)
     if not a.no_warmup:  # numba compile / cache load on a coarse copy (16^3 fluid)
         w = build(a.method, 1.0 / 34, *args[2:])
         step_to(w, 5 * DT_MAX)

@@ -34,18 +34,21 @@ the first step takes the set-up's p, e.g. hydrostatic, in full), on every fluid 
 (limited to the particles predicted to be compressed, as in SPlisHSPlasH, the a/80 dam
 break's first steps needed 90-100 iterations instead of 2).  A
 shortened step carries only (dt / dt_prev)^2 of the density error
-(:func:`sphfem.fluid.projection.carried_weight`).  The divergence solve starts from zero:
-its warm start (Bender & Koschier 2017 warm-start both solves; SPlisHSPlasH's
-``warmstartDivergenceSolve``), half of the last step's kappa^v kept as dt kappa^v, is
-implemented (:func:`warm_start_divergence`) but off (WARM_FRACTION_DIVERGENCE = 0).
-Measured, one thread, fraction 0.5 against 0: divergence iterations per step 2.32 -> 1.63
-on a 3D DamBreakModel of 2,197 fluid particles (r = 0.035 m, 0.5 s) and 4.17 -> 2.71 on
-the 2D dam break a/30 at 0.01 % tolerance (1.0 -> 1.0 at 0.1 %, already the minimum), but
-CPU seconds per step 53 -> 58 and 59 -> 66 ms in two paired 3D rounds (the warm start
-costs about one iteration: a density rate and a pressure application) and the column at
-rest's wall force / weight 1.0000 -> 0.9976 (the partial application is not symmetric).
-Worth a try only where the divergence solve takes many iterations (6.3 per step at 59,319
-particles in benchmarks/splishsplash).
+(:func:`sphfem.fluid.projection.carried_weight`).  The divergence solve is warm-started the
+same way (Bender & Koschier 2017 warm-start both solves; SPlisHSPlasH's
+``warmstartDivergenceSolve``): ``dfsph_divergence_warm_start`` (default 0.5) of the last
+step's kappa^v, kept as dt kappa^v so that it does not depend on the new step's dt, applied
+on the particles where the flow compresses (:func:`warm_start_divergence`).  Measured
+(benchmarks/splishsplash, DamBreakModel, 59,319 fluid particles, cubic R = 2 dx, to 0.25 s,
+2 threads, idle machine, side by side): divergence iterations per step 11.6 -> 7.0, density
+2.8 -> 2.8, stepping 30.8 -> 25.3 s (an earlier pair: 25.0 -> 18.0 s); at 6,859 particles
+4.7 -> 3.4 iterations and no change in time (the warm start costs about one iteration: a
+density rate and a pressure application).  The 2D column at rest keeps its bounds (wall
+force / weight 0.99997), the 2D dam break's front Z(T = 3) moves by -0.2 % (a/20) and
++1.2 % (a/40).  The full fraction 1 took the 59k case to 1.4 iterations, but the 2D dam
+break at a/20 blew up at T = 3.0 (8,800 m/s), and at a/40 its front ran 2.6 % ahead: the
+push a warm start gives is not taken back where it overshoots into expansion (the error
+counts compression only).
 
 Order within the shared step (:func:`sphfem.fluid.pressure.projection_advance`): the
 paper's divergence solve of the end of step n runs at the start of step n+1, at the same
@@ -84,9 +87,6 @@ MIN_ITERATIONS_DIVERGENCE = 1
 MIN_ITERATIONS_DENSITY = 2
 #: fraction of the last step's kappa applied as warm start of the density solve
 WARM_FRACTION = 0.5
-#: fraction of the last step's dt kappa^v applied as warm start of the divergence solve
-#: (0: off; see the module docstring for why)
-WARM_FRACTION_DIVERGENCE = 0.0
 #: relaxation of the Jacobi increments (SPlisHSPlasH's DFSPH: 0.5; see the module docstring)
 RELAX = 0.5
 
@@ -135,30 +135,33 @@ def jacobi(solver, w, dt: float, density: bool, tol: float, min_it: int, max_it:
 
 
 def warm_start_divergence(solver, state: ProjectionState, w, dt: float) -> None:
-    """Apply WARM_FRACTION_DIVERGENCE of the last step's divergence solve to the fluid
-    particles: q^v = WARM_FRACTION_DIVERGENCE (dt_prev kappa^v_prev) / (dt rho_i) into
-    ``w.Qv`` (zero for a particle without a stored value, e.g. at the first step), and
-    v_i += dt a_i(q^v) only where D_i(v^n) > 0, as SPlisHSPlasH's warm start: applied
-    everywhere, the push it gives expanding particles is never taken back (the solve's
-    error counts compression only) and the 2D dam break's front at a/30 ran 0.7 % ahead,
-    at the 0.01 % tolerance too."""
+    """Apply the fraction f = ``dfsph_divergence_warm_start`` of the last step's divergence
+    solve, as SPlisHSPlasH's warm start: q^v_i = f (dt_prev kappa^v_prev,i) / (dt rho_i)
+    into ``w.Qv`` on the fluid particles whose flow compresses (D_i(v^n) > 0), 0 on the
+    others (and on a particle without a stored value, e.g. at the first step), then
+    v += dt a(q^v) on every fluid particle.  The pair form of a(q) is antisymmetric, so the
+    warm start conserves momentum and the walls' reaction (from the step's total q) stays
+    exact; applying the velocity change only to the compressing particles instead made the
+    resting ink drop of tests/test_dfsph_coupled.py load its substrate with 1.2 % more than
+    its weight.  The stored q^v of an expanding particle is dropped: kept, its push is never
+    taken back (the solve's error counts compression only) and the 2D dam break's front at
+    a/30 ran 0.7 % ahead."""
     p = solver.p
-    on = (p.kind == FLUID) & (w.rho > 0)
     w.Qv[:] = 0.0
-    if WARM_FRACTION_DIVERGENCE == 0.0 or not on.any():
+    frac = solver.params.dfsph_divergence_warm_start
+    if frac == 0.0:
         return
     impulse = state.warm_v.get(p.id)  # dt kappa^v of the last step, >= 0
-    w.Qv[on] = WARM_FRACTION_DIVERGENCE * impulse[on] / (dt * w.rho[on])
-    if not w.Qv.any():
+    on = (p.kind == FLUID) & (w.rho > 0) & (impulse > 0.0)
+    if not on.any():
         return
     nl = solver.nbrs
     pairs = (w.M, p.kind, nl.offsets, w.nbj, w.grad, w.cnt)
     density_rate(p.v, *pairs, w.rate)  # D_i at v^n, before the warm start
+    on &= w.rate > 0.0  # only where the flow compresses (SPlisHSPlasH)
+    w.Qv[on] = frac * impulse[on] / (dt * w.rho[on])
     wall_extrapolate(w.Qv, p.kind, nl.offsets, w.nbj, w.wgt, w.cnt)
-    dv = np.zeros_like(p.v)
-    pressure_acceleration(w.Qv, *pairs, dt, dv, False)
-    comp = on & (w.rate > 0.0)  # only where the flow compresses (SPlisHSPlasH)
-    p.v[comp] += dv[comp]
+    pressure_acceleration(w.Qv, *pairs, dt, p.v, True)
 
 
 def warm_start(solver, state: ProjectionState, w, dt: float) -> None:
@@ -238,6 +241,10 @@ METHOD = register(PressureMethod(
         Param("dfsph_divergence_tolerance", float, 0.1, unit="%", positive=True,
               when=_WHEN,
               doc="divergence solve: largest mean dt max(Drho/Dt, 0)/rho0, in per cent"),
+        Param("dfsph_divergence_warm_start", float, 0.5, ge=0.0, le=1.0, when=_WHEN,
+              doc="fraction of the last step's divergence-solve pressure impulse applied "
+                  "before the divergence solve, where the flow compresses (Bender & "
+                  "Koschier 2017's warm start, as SPlisHSPlasH; 1 is unstable; 0: off)"),
         Param("dfsph_max_iterations", int, 100, ge=1, when=_WHEN,
               doc="iteration limit of the density solve (reaching it is logged and counted "
                   "in steps_not_converged)"),
