@@ -13,7 +13,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-from test_pressure_iisph import check_column, run_column
+from test_pressure_iisph import _pack, check_column, run_column
 
 from sphfem.fluid import projection as P
 from sphfem.fluid.pressure_dfsph_bender2017 import stiffness
@@ -43,7 +43,7 @@ def test_density_solve_divides_by_the_factor(dim):
     P.diagonal(M, ps.kind, nl.offsets, nbj, grad, cnt, A)
     i = int(np.flatnonzero(ps.kind == FLUID)[0])
     assert abs(rho[i] / rho0 - 1) < 1e-12
-    pairs = (M, ps.kind, nl.offsets, nbj, grad, cnt)
+    s = dict(M=M, kind=ps.kind, off=nl.offsets, nbj=nbj, grad=grad, cnt=cnt, n=ps.n, dim=dim)
     v = np.zeros((ps.n, dim))
     v[i, 0] = 0.5  # into the walls: rho* = rho0 + dt D_i = rho0 + 4.1 (2D)
     ps.x[i, 0] += 0.2 * dx  # off the lattice site: a density gradient
@@ -51,6 +51,7 @@ def test_density_solve_divides_by_the_factor(dim):
                         kernel_sigma(WENDLAND_C2, dim, R), WENDLAND_C2, np.zeros(dim), nbj,
                         grad, wgt, cnt, rho)
     P.diagonal(M, ps.kind, nl.offsets, nbj, grad, cnt, A)
+    pairs = (ps.kind, *_pack(s, np.float64))
     rate, Q, dq = np.zeros(ps.n), np.zeros(ps.n), np.zeros(ps.n)
     P.density_rate(v, *pairs, rate)
     err0 = stiffness(rho, rate, A, ps.kind, rho0, dt, True, Q, dq, 1.0, 1.0)

@@ -50,16 +50,31 @@ def _lattice_system(dim, n, walls=0, periodic=False):
                         kernel_sigma(WENDLAND_C2, dim, R), WENDLAND_C2, period, out["nbj"],
                         out["grad"], out["wgt"], out["cnt"], out["rho"])
     P.diagonal(M, ps.kind, nl.offsets, out["nbj"], out["grad"], out["cnt"], out["A"])
+    out["packed"] = _pack(out, np.float64)
     return out
 
 
-def _pairs(s):
-    return s["M"], s["kind"], s["off"], s["nbj"], s["grad"], s["cnt"]
+def _pack(s, dtype):
+    """The fluid rows' packed pairs (:func:`P.compact_pairs`) with M_j g_ij in ``dtype``."""
+    fl = s["kind"] == FLUID
+    off_c = np.zeros(s["n"] + 1, np.int64)
+    off_c[1:] = np.cumsum(np.where(fl, s["cnt"], 0))
+    nb_c = np.zeros(off_c[-1], np.int32)
+    mg_c = np.zeros((off_c[-1], s["dim"]), dtype)
+    P.compact_pairs(s["M"], s["kind"], s["off"], s["nbj"], s["grad"], s["cnt"], off_c, nb_c,
+                    mg_c)
+    return off_c, nb_c, mg_c
 
 
-def _accel(s, q):
+def _pairs(s, packed=None):
+    """Arguments of P.density_rate / P.pressure_acceleration (double precision unless
+    ``packed`` is given)."""
+    return (s["kind"], *(packed or s["packed"]))
+
+
+def _accel(s, q, packed=None):
     a = np.zeros((s["n"], s["dim"]))
-    P.pressure_acceleration(q, *_pairs(s), 1.0, a, False)
+    P.pressure_acceleration(q, *_pairs(s, packed), 1.0, a, False)
     return a
 
 
@@ -91,20 +106,43 @@ def test_pressure_acceleration_of_a_linear_field(dim):
     assert np.abs(a[inner, :-1]).max() < 1e-9 * g
 
 
+@pytest.mark.parametrize("single", [False, True])
 @pytest.mark.parametrize("dim", [2, 3])
-def test_wall_reaction_balances_the_pressure_forces(dim):
+def test_wall_reaction_balances_the_pressure_forces(dim, single):
+    """To round-off, with the packed M_j g_ij in double or (as the solvers store them) in
+    single precision: the reaction rounds its terms alike."""
     s = _lattice_system(dim, 10 if dim == 2 else 6, walls=3)
     fl, wall = s["kind"] == FLUID, s["kind"] == WALL
     rng = np.random.default_rng(1)
     q = np.where(fl, rng.random(s["n"]), 0.0)
     P.wall_extrapolate(q, s["kind"], s["off"], s["nbj"], s["wgt"], s["cnt"])
     assert q[wall].max() > 0  # the walls next to the fluid carry pressure
-    a = _accel(s, q)
+    a = _accel(s, q, _pack(s, np.float32 if single else np.float64))
     f = np.zeros((s["n"], dim))
-    P.wall_reaction(q, s["m"], *_pairs(s)[:2], s["off"], s["nbj"], s["grad"], s["cnt"], f)
+    P.wall_reaction(q, s["m"], s["M"], s["kind"], s["off"], s["nbj"], s["grad"], s["cnt"],
+                    single, f)
     total = (s["m"][fl, None] * a[fl]).sum(0) + f[wall].sum(0)
     scale = np.abs(s["m"][fl, None] * a[fl]).sum()
     assert np.abs(total).max() < 1e-13 * scale
+
+
+@pytest.mark.parametrize("dim", [2, 3])
+def test_single_precision_pairs_match_double(dim):
+    """The solvers' float32 M_j g_ij (projection.PAIR_DTYPE) change a density rate and a
+    pressure acceleration by ~1e-7 relative (float32's 6e-8 unit round-off)."""
+    assert P.PAIR_DTYPE == np.float32 and P.SINGLE_PAIRS
+    s = _lattice_system(dim, 10 if dim == 2 else 6, walls=3)
+    rng = np.random.default_rng(2)
+    fl = s["kind"] == FLUID
+    q = np.where(fl, rng.random(s["n"]), 0.0)
+    u = rng.standard_normal((s["n"], dim))
+    single = _pack(s, np.float32)
+    a64, a32 = _accel(s, q), _accel(s, q, single)
+    r64, r32 = np.zeros(s["n"]), np.zeros(s["n"])
+    P.density_rate(u, *_pairs(s), r64)
+    P.density_rate(u, *_pairs(s, single), r32)
+    assert 0 < np.abs(a32 - a64).max() < 1e-6 * np.abs(a64).max()
+    assert 0 < np.abs(r32 - r64).max() < 1e-6 * np.abs(r64).max()
 
 
 @pytest.mark.parametrize("dim", [2, 3])

@@ -84,7 +84,7 @@ def test_dfsph_divergence_warm_start_is_half_the_last_velocity_change():
     stored = st.warm_v.get(s.p.id)
     assert stored[fl].max() > 0.0 and stored.min() >= 0.0  # compressed somewhere, clamped
     v0 = s.p.v.copy()
-    projection.density_rate(v0, w.M, s.p.kind, s.nbrs.offsets, w.nbj, w.grad, w.cnt, w.rate)
+    projection.density_rate(v0, *projection.solve_pairs(s, w), w.rate)
     comp = fl & (w.rate > 0.0)
     assert comp.any() and (fl & ~comp).any()
     dv = []
@@ -98,7 +98,7 @@ def test_dfsph_divergence_warm_start_is_half_the_last_velocity_change():
         # momentum: the fluid's change is the negative of the walls' reaction
         f = np.zeros_like(s.p.v)
         projection.wall_reaction(w.Qv, s.p.m, w.M, s.p.kind, s.nbrs.offsets, w.nbj, w.grad,
-                                 w.cnt, f)
+                                 w.cnt, projection.SINGLE_PAIRS, f)
         mom = (s.p.m[fl, None] * dv[-1][fl]).sum(0) / dt + f[s.p.kind == WALL].sum(0)
         assert np.abs(mom).max() < 1e-10 * np.abs(s.p.m[fl, None] * dv[-1][fl]).sum() / dt
     assert np.abs(dv[0]).max() > 0.0

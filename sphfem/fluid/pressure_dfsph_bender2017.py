@@ -120,7 +120,7 @@ def jacobi(solver, w, dt: float, density: bool, tol: float, min_it: int, max_it:
     """Jacobi iterations of one solve on ``solver.p.v`` (fluid rows), accumulating q in
     ``w.Q`` (density) or ``w.Qv`` (divergence); returns (iterations, final error)."""
     p, nl, rho0 = solver.p, solver.nbrs, solver.params.rho0
-    pairs = (w.M, p.kind, nl.offsets, w.nbj, w.grad, w.cnt)
+    pairs = projection.solve_pairs(solver, w)
     Q = w.Q if density else w.Qv
     it = 0
     while True:
@@ -156,7 +156,7 @@ def warm_start_divergence(solver, state: ProjectionState, w, dt: float) -> None:
     if not on.any():
         return
     nl = solver.nbrs
-    pairs = (w.M, p.kind, nl.offsets, w.nbj, w.grad, w.cnt)
+    pairs = projection.solve_pairs(solver, w)
     density_rate(p.v, *pairs, w.rate)  # D_i at v^n, before the warm start
     on &= w.rate > 0.0  # only where the flow compresses (SPlisHSPlasH)
     w.Qv[on] = frac * impulse[on] / (dt * w.rho[on])
@@ -169,7 +169,7 @@ def warm_start(solver, state: ProjectionState, w, dt: float) -> None:
     set-up's p, in full) to the fluid particles (v* -> v* + dt a(q_warm)); q_warm goes into
     ``w.Q``."""
     p, nl = solver.p, solver.nbrs
-    pairs = (w.M, p.kind, nl.offsets, w.nbj, w.grad, w.cnt)
+    pairs = projection.solve_pairs(solver, w)
     fl = p.kind == FLUID
     first = not state.log.iterations  # the set-up's p (e.g. hydrostatic) in full
     kappa = p.p / np.where(w.rho > 0, w.rho, 1.0) if first else state.warm.get(p.id)

@@ -102,7 +102,7 @@ def _solve_timed(solver, dt: float, state):
     st = state if state is not None else ProjectionState(tolerance=pa.iisph_tolerance)
     w = projection.prepare(solver, st)
     p, nl, rho0 = solver.p, solver.nbrs, pa.rho0
-    pairs = (w.M, p.kind, nl.offsets, w.nbj, w.grad, w.cnt)
+    pairs = projection.solve_pairs(solver, w)
     fl = p.kind == FLUID
     g = solver.body_force(solver.t)
     projection.add_wall_hydrostatic(solver, w, dt, g)
