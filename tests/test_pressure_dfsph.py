@@ -40,18 +40,17 @@ def test_density_solve_divides_by_the_factor(dim):
     P.pairs_and_density(ps.x, ps.kind, M, nl.offsets, nl.indices, R,
                         kernel_sigma(WENDLAND_C2, dim, R), WENDLAND_C2, np.zeros(dim), nbj,
                         grad, wgt, cnt, rho)
-    P.diagonal(M, ps.kind, nl.offsets, nbj, grad, cnt, A)
     i = int(np.flatnonzero(ps.kind == FLUID)[0])
     assert abs(rho[i] / rho0 - 1) < 1e-12
-    s = dict(M=M, kind=ps.kind, off=nl.offsets, nbj=nbj, grad=grad, cnt=cnt, n=ps.n, dim=dim)
+    s = dict(M=M, kind=ps.kind, off=nl.offsets, nbj=nbj, grad=grad, cnt=cnt, n=ps.n, dim=dim,
+             A=A)
     v = np.zeros((ps.n, dim))
     v[i, 0] = 0.5  # into the walls: rho* = rho0 + dt D_i = rho0 + 4.1 (2D)
     ps.x[i, 0] += 0.2 * dx  # off the lattice site: a density gradient
     P.pairs_and_density(ps.x, ps.kind, M, nl.offsets, nl.indices, R,
                         kernel_sigma(WENDLAND_C2, dim, R), WENDLAND_C2, np.zeros(dim), nbj,
                         grad, wgt, cnt, rho)
-    P.diagonal(M, ps.kind, nl.offsets, nbj, grad, cnt, A)
-    pairs = (ps.kind, *_pack(s, np.float64))
+    pairs = (ps.kind, *_pack(s, np.float64))  # and A
     rate, Q, dq = np.zeros(ps.n), np.zeros(ps.n), np.zeros(ps.n)
     P.density_rate(v, *pairs, rate)
     err0 = stiffness(rho, rate, A, ps.kind, rho0, dt, True, Q, dq, 1.0, 1.0)

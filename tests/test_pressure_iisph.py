@@ -49,20 +49,20 @@ def _lattice_system(dim, n, walls=0, periodic=False):
     P.pairs_and_density(ps.x, ps.kind, M, nl.offsets, nl.indices, R,
                         kernel_sigma(WENDLAND_C2, dim, R), WENDLAND_C2, period, out["nbj"],
                         out["grad"], out["wgt"], out["cnt"], out["rho"])
-    P.diagonal(M, ps.kind, nl.offsets, out["nbj"], out["grad"], out["cnt"], out["A"])
-    out["packed"] = _pack(out, np.float64)
+    out["packed"] = _pack(out, np.float64)  # and A
     return out
 
 
 def _pack(s, dtype):
-    """The fluid rows' packed pairs (:func:`P.compact_pairs`) with M_j g_ij in ``dtype``."""
+    """The fluid rows' packed pairs (:func:`P.pack_pairs`) with M_j g_ij in ``dtype``; the
+    diagonal into s["A"]."""
     fl = s["kind"] == FLUID
     off_c = np.zeros(s["n"] + 1, np.int64)
     off_c[1:] = np.cumsum(np.where(fl, s["cnt"], 0))
     nb_c = np.zeros(off_c[-1], np.int32)
     mg_c = np.zeros((off_c[-1], s["dim"]), dtype)
-    P.compact_pairs(s["M"], s["kind"], s["off"], s["nbj"], s["grad"], s["cnt"], off_c, nb_c,
-                    mg_c)
+    P.pack_pairs(s["M"], s["kind"], s["off"], s["nbj"], s["grad"], s["cnt"], off_c, nb_c, mg_c,
+                 s["A"])
     return off_c, nb_c, mg_c
 
 

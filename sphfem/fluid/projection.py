@@ -118,13 +118,20 @@ def pairs_and_density(x, kind, M, offsets, indices, R, sigma, kernel_code, perio
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
-def diagonal(M, kind, offsets, nbj, grad, cnt, A):
-    """A_i = max((s_F + 2 s_W) . (s_F + s_W), 0) + sum_F m_i m_j |g_ij|^2 of fluid rows
-    (0 elsewhere), s_F = sum_F M_j g_ij, s_W = sum_W M_b g_ib.  The first term is the
-    exact diagonal's; it turns negative where a wall is near and the fluid support is
-    deficient (s_F ~ -1.5 s_W), and is then dropped: a larger diagonal only under-relaxes
-    the Jacobi step, a vanishing one made it blow up (a 3 MPa spike at the 2D dam break's
-    wall)."""
+def pack_pairs(M, kind, offsets, nbj, grad, cnt, off_c, nb_c, mg_c, A):
+    """The fluid rows' in-range pairs of :func:`pairs_and_density`, packed without gaps for
+    the solver's iterations, and the diagonal A_i, in one pass over the pairs.
+
+    Packed: row i's pairs at ``off_c[i] : off_c[i + 1]`` (``off_c``: the prefix sum of
+    ``cnt`` over fluid rows, no pairs for other rows), neighbour ``nb_c`` (int32) and
+    mg_ij = M_j g_ij in ``mg_c`` (its dtype: float32 in the solvers, :data:`PAIR_DTYPE`).
+
+    A_i = max((s_F + 2 s_W) . (s_F + s_W), 0) + sum_F M_i M_j |g_ij|^2 of fluid rows (0
+    elsewhere; double precision), s_F = sum_F M_j g_ij, s_W = sum_W M_b g_ib.  The first
+    term is the exact diagonal's; it turns negative where a wall is near and the fluid
+    support is deficient (s_F ~ -1.5 s_W), and is then dropped: a larger diagonal only
+    under-relaxes the Jacobi step, a vanishing one made it blow up (a 3 MPa spike at the 2D
+    dam break's wall)."""
     dim = grad.shape[1]
     for blk in prange(NBLOCKS):  # blocks of equal list length (see _block)
         lo, hi = _block(blk, offsets)
@@ -133,6 +140,7 @@ def diagonal(M, kind, offsets, nbj, grad, cnt, A):
             if kind[i] != FLUID:
                 continue
             o = offsets[i]
+            oc = off_c[i]
             f0 = 0.0
             f1 = 0.0
             f2 = 0.0
@@ -142,49 +150,33 @@ def diagonal(M, kind, offsets, nbj, grad, cnt, A):
             self_sum = 0.0
             for k in range(cnt[i]):
                 j = nbj[o + k]
-                g0 = grad[o + k, 0]
-                g1 = grad[o + k, 1] if dim > 1 else 0.0
-                g2 = grad[o + k, 2] if dim > 2 else 0.0
+                nb_c[oc + k] = j
+                g0 = M[j] * grad[o + k, 0]
+                g1 = M[j] * grad[o + k, 1] if dim > 1 else 0.0
+                g2 = M[j] * grad[o + k, 2] if dim > 2 else 0.0
+                mg_c[oc + k, 0] = g0
+                if dim > 1:
+                    mg_c[oc + k, 1] = g1
+                if dim > 2:
+                    mg_c[oc + k, 2] = g2
                 if kind[j] == FLUID:
-                    f0 += M[j] * g0
-                    f1 += M[j] * g1
-                    f2 += M[j] * g2
-                    self_sum += M[i] * M[j] * (g0 * g0 + g1 * g1 + g2 * g2)
+                    f0 += g0
+                    f1 += g1
+                    f2 += g2
+                    self_sum += M[i] / M[j] * (g0 * g0 + g1 * g1 + g2 * g2)
                 else:
-                    w0 += M[j] * g0
-                    w1 += M[j] * g1
-                    w2 += M[j] * g2
+                    w0 += g0
+                    w1 += g1
+                    w2 += g2
             cross = ((f0 + 2.0 * w0) * (f0 + w0) + (f1 + 2.0 * w1) * (f1 + w1)
                      + (f2 + 2.0 * w2) * (f2 + w2))
             A[i] = self_sum + (cross if cross > 0.0 else 0.0)
 
 
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
-def compact_pairs(M, kind, offsets, nbj, grad, cnt, off_c, nb_c, mg_c):
-    """The fluid rows' in-range pairs of :func:`pairs_and_density`, packed without gaps for
-    the solver's iterations: row i's pairs at ``off_c[i] : off_c[i + 1]`` (``off_c``: the
-    prefix sum of ``cnt`` over fluid rows, 0 pairs for other rows), neighbour ``nb_c``
-    (int32) and mg_ij = M_j g_ij in ``mg_c`` (its dtype: float32 in the solvers, see
-    :func:`prepare`)."""
-    dim = grad.shape[1]
-    for blk in prange(NBLOCKS):  # blocks of equal list length (see _block)
-        lo, hi = _block(blk, offsets)
-        for i in range(lo, hi):
-            if kind[i] != FLUID:
-                continue
-            o = offsets[i]
-            oc = off_c[i]
-            for k in range(cnt[i]):
-                j = nbj[o + k]
-                nb_c[oc + k] = j
-                for c in range(dim):
-                    mg_c[oc + k, c] = M[j] * grad[o + k, c]
-
-
-@njit(cache=True, parallel=True, fastmath=FASTMATH)
 def density_rate(u, kind, off_c, nb_c, mg_c, out):
     """out_i = sum_j M_j (u_i - u_j) . g_ij of fluid rows over the packed pairs of
-    :func:`compact_pairs` (wall rows of ``u``: the walls' velocities, or zeros for a
+    :func:`pack_pairs` (wall rows of ``u``: the walls' velocities, or zeros for a
     pressure acceleration); 0 elsewhere."""
     dim = mg_c.shape[1]
     for blk in prange(NBLOCKS):  # blocks of equal pair count (see _block)
@@ -206,7 +198,7 @@ def density_rate(u, kind, off_c, nb_c, mg_c, out):
 @njit(cache=True, parallel=True, fastmath=FASTMATH)
 def pressure_acceleration(q, kind, off_c, nb_c, mg_c, scale, out, accumulate):
     """out_i (+)= scale a_i(q) of fluid rows, a_i(q) = -sum_j M_j (q_i + q_j) g_ij over the
-    packed pairs of :func:`compact_pairs` (fluid and wall neighbours; q = p / rho^2, a
+    packed pairs of :func:`pack_pairs` (fluid and wall neighbours; q = p / rho^2, a
     wall's q_b from :func:`wall_extrapolate`); rows of other kinds are zeroed unless
     ``accumulate``."""
     dim = mg_c.shape[1]
@@ -300,7 +292,7 @@ def wall_hydrostatic_q(x, rho, acc, kind, offsets, nbj, wgt, cnt, gravity, perio
 def wall_reaction(q, m, M, kind, offsets, nbj, grad, cnt, single, f):
     """f_b = -sum_i m_i M_b (q_i + q_b) g_bi on wall rows b: the exact negative of the wall
     terms of m_i a_i(q) (fluid rows left alone).  ``single``: the fluid's terms used
-    mg_ib = M_b g_ib rounded to float32 (:func:`compact_pairs`), so the same rounding is
+    mg_ib = M_b g_ib rounded to float32 (:func:`pack_pairs`), so the same rounding is
     applied here (g_ib = -g_bi exactly) and the balance stays exact."""
     dim = grad.shape[1]
     for blk in prange(NBLOCKS):  # blocks of equal list length (see _block)
@@ -334,7 +326,7 @@ def lattice_sum(kernel_code: int, dim: int, R_over_dx: float) -> float:
 
 
 #: storage of the packed pairs' M_j g_ij that every solver iteration reads
-#: (:func:`compact_pairs`): single precision halves the memory the two gathers of an
+#: (:func:`pack_pairs`): single precision halves the memory the two gathers of an
 #: iteration stream (measured at 59,319 fluid particles, 2 threads: density rate 10.0 ->
 #: 4.2 ms, pressure acceleration 12.4 -> 3.6 ms, against 7.0 / 5.2 ms packed in double);
 #: the operator then differs from the double one by ~1e-7 relative, far below the solves'
@@ -421,7 +413,7 @@ class Work:
         self.n, self.dim = n, dim
 
     def fit_packed(self, pairs: int) -> None:
-        """Room for ``pairs`` packed fluid-row pairs (:func:`compact_pairs`)."""
+        """Room for ``pairs`` packed fluid-row pairs (:func:`pack_pairs`)."""
         a = self.arrays
         if "nb_c" not in a or a["nb_c"].shape[0] < pairs or a["mg_c"].shape[1] != self.dim:
             size = pairs + pairs // 4
@@ -511,11 +503,10 @@ def prepare(solver, state: ProjectionState) -> Work:
     M[wall] = rho0 * p.vol[wall] / state.lattice_sum
     pairs_and_density(p.x, p.kind, M, nl.offsets, nl.indices, solver.R, solver.sigma,
                       solver.kernel_code, solver.period, w.nbj, w.grad, w.wgt, w.cnt, w.rho)
-    diagonal(M, p.kind, nl.offsets, w.nbj, w.grad, w.cnt, w.A)
     w.off_c[0] = 0
     np.cumsum(np.where(fl, w.cnt, 0), out=w.off_c[1:])
     w.fit_packed(int(w.off_c[-1]))
-    compact_pairs(M, p.kind, nl.offsets, w.nbj, w.grad, w.cnt, w.off_c, w.nb_c, w.mg_c)
+    pack_pairs(M, p.kind, nl.offsets, w.nbj, w.grad, w.cnt, w.off_c, w.nb_c, w.mg_c, w.A)
     state.log.start_density_error.append(mean_excess(w.rho, p.kind, rho0))
     p.rho[fl] = np.maximum(w.rho[fl], rho0)
     solver.wall["pressure_pairs"] = solver.wall.get("pressure_pairs", 0.0) + (
