@@ -29,7 +29,8 @@ import numpy as np
 
 #: (cells, dofs) -> (h_fine, h_coarse) of the recipe, ~dofs unknowns (P1)
 MESHES = {
-    ("tet", "1e4"): (20e-6, 150e-6), ("tet", "1e5"): (10e-6, 50e-6),
+    ("tet", "1e4"): (20e-6, 150e-6), ("tet", "3e4"): (14e-6, 90e-6),
+    ("tet", "1e5"): (10e-6, 50e-6),
     ("hex", "1e4"): (40e-6, 200e-6), ("hex", "1e5"): (20e-6, 80e-6),
     ("tri", "1e4"): (4e-6, 20e-6), ("tri", "1e5"): (1.7e-6, 8.5e-6),
     ("quad", "1e4"): (5e-6, 20e-6), ("quad", "1e5"): (2.1e-6, 8.5e-6),
@@ -113,7 +114,8 @@ def main(argv=None) -> int:
     p.add_argument("what", choices=("assemble", "factorize"))
     p.add_argument("--cells", choices=("tet", "hex", "tri", "quad"), default="tet")
     p.add_argument("--degree", type=int, choices=(1, 2), default=1)
-    p.add_argument("--dofs", choices=("1e4", "1e5"), default="1e5")
+    p.add_argument("--dofs", choices=("1e4", "3e4", "1e5"), default="1e5",
+                   help="3e4: tet only")
     p.add_argument("--backend", default="auto")
     p.add_argument("--old", action="store_true")
     a = p.parse_args(argv)

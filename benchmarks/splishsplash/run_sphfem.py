@@ -124,7 +124,8 @@ def main(argv=None) -> int:
     fl = s.p.kind == FLUID
     out = {"code": "sphfem", "method": a.method, "kernel": a.kernel, "support_dx": a.support,
            "fluid_particles": nf, "wall_particles": int(s.p.n - nf), "radius": a.radius,
-           "t_end": s.t, "steps": s.step_count, "neighbor_rebuilds": s.n_rebuilds, "wall_s": wall, "cpu_s": cpu,
+           "t_end": s.t, "steps": s.step_count, "neighbor_rebuilds": s.n_rebuilds,
+           "wall_s": wall, "cpu_s": cpu,
            "threads": a.threads, "mean_dt": s.t / s.step_count,
            "it_mean": float(np.mean(log.iterations)), "it_max": int(max(log.iterations)),
            "density_err_max_pct": 100 * float(max(log.density_error)),
