@@ -3,9 +3,11 @@
 Both solvers (:mod:`~sphfem.fluid.pressure_iisph_ihmsen2014`,
 :mod:`~sphfem.fluid.pressure_dfsph_bender2017`) work at the positions x^n of the step with
 the kernel gradients of one list, so the pairs and their gradients g_ij = grad_i W_ij are
-computed once per step (:func:`pairs_and_density`) and every solver iteration is two
-gathers over the stored pairs.  Notation as in :mod:`sphfem.fluid.passes`: r = x_j - x_i,
-g_ij = F(r) r with F = -W'(r)/r, so g_ij points from i to j.
+computed once per step (:func:`pairs_and_density`), the fluid rows' pairs are packed with
+M_j g_ij in single precision (:func:`pack_pairs`, :data:`PAIR_DTYPE`), and every solver
+iteration is two gathers over the packed pairs.  Notation as in
+:mod:`sphfem.fluid.passes`: r = x_j - x_i, g_ij = F(r) r with F = -W'(r)/r, so g_ij points
+from i to j.
 
 Density by summation over fluid and wall particles (Ihmsen et al. 2014, eq. 1; walls as
 Akinci et al. 2012 boundary particles):
