@@ -35,9 +35,10 @@ import json
 import os
 import subprocess
 import sys
-import tempfile
 import time
 from pathlib import Path
+
+from sphfem.output import atomic_write_text
 
 HERE = Path(__file__).resolve().parent
 PARTS_FLUID = {"search": "neighbour list build", "fluid": "fluid step (passes, integration)",
@@ -99,9 +100,7 @@ def _append(path: Path, rec: dict, key: str) -> None:
     old = [json.loads(x) for x in path.read_text().splitlines()] if path.exists() else []
     old = [r for r in old if r.get(key) != rec[key]] + [rec]
     old.sort(key=lambda r: r[key])
-    with tempfile.NamedTemporaryFile("w", dir=path.parent, delete=False) as f:
-        f.write("".join(json.dumps(r) + "\n" for r in old))
-    os.replace(f.name, path)
+    atomic_write_text(path, "".join(json.dumps(r) + "\n" for r in old))
 
 
 def fit(ns, secs) -> tuple[float, float]:

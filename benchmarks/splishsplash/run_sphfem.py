@@ -19,6 +19,7 @@ scene.  Per-phase seconds are the solver's own ``wall`` timers.
 from __future__ import annotations
 
 import argparse
+import ast
 import json
 import os
 import sys
@@ -107,7 +108,7 @@ def main(argv=None) -> int:
     extra = {}
     for kv in a.set:
         k, v = kv.split("=", 1)
-        extra[k] = float(v) if any(c in v for c in ".e") else int(v)
+        extra[k] = ast.literal_eval(v)  # a number (or other literal)
     args = (a.method, a.radius, a.max_error, a.max_error_v, a.kernel, a.support, a.threads,
             extra)
     if not a.no_warmup:  # numba compile / cache load on a coarse copy (16^3 fluid)
