@@ -168,9 +168,10 @@ def pysph_worker(a) -> dict:
 # our worker (the project's Python)
 # ------------------------------------------------------------------------------------------
 def build_ours_2d(dx: float, R_over_dx: float = 3.0, alpha: float = 0.02, cfl: float = 0.25,
-                  threads: int = 0):
+                  threads: int = 0, pressure: str = "wcsph"):
     """PySPH dam_break_2d in sphfem: its column (1/dx + 1) x (2/dx + 1) particles, spacing
-    dx, standing on the floor at the left wall of a 4 x 4 tank (3 Adami layers)."""
+    dx, standing on the floor at the left wall of a 4 x 4 tank (3 Adami layers);
+    ``pressure``: the [fluid] pressure method (:func:`_fluid_start`)."""
     import numpy as np
 
     from sphfem.fluid.setup import box_walls, hydrostatic_density, lattice, make_particles
@@ -182,12 +183,27 @@ def build_ours_2d(dx: float, R_over_dx: float = 3.0, alpha: float = 0.02, cfl: f
     layers = int(np.ceil(R_over_dx))
     xw = box_walls([0.0, 0.0], [4.0, 4.0], dx, layers)
     c0 = 10.0 * math.sqrt(2 * G * H)  # PySPH's co
-    rhof = hydrostatic_density(ny * dx - xf[:, 1], 1000.0, c0, G)
+    rhof = (hydrostatic_density(ny * dx - xf[:, 1], 1000.0, c0, G) if pressure == "wcsph"
+            else None)
     ps = make_particles(xf, xw, dx, 1000.0, rhof)
     par = FluidParams(c0=c0, mu=1e-3, gravity=(0.0, -G), alpha=alpha, cfl=cfl,
-                      threads=threads)
+                      threads=threads, pressure=pressure)
     m = (layers + 1) * dx
-    return FluidSolver(ps, R_over_dx * dx, [-m, -m], [4.0 + m, 8.0], params=par), 0.0
+    s = FluidSolver(ps, R_over_dx * dx, [-m, -m], [4.0 + m, 8.0], params=par)
+    return _fluid_start(s, ny * dx, pressure), 0.0
+
+
+def _fluid_start(s, top: float, pressure: str):
+    """A projection method (IISPH, DFSPH) starts from the lattice at rho0 with the
+    hydrostatic pressure rho0 g (top - z) as its first solve's initial guess (the
+    ``dambreak-dfsph`` validation's start); WCSPH from the hydrostatic density (set by the
+    builder)."""
+    if pressure != "wcsph":
+        from sphfem.particles import FLUID
+
+        fl = s.p.kind == FLUID
+        s.p.p[fl] = 1000.0 * G * (top - s.p.x[fl, -1])
+    return s
 
 
 def pysph_3d_boxes(dx: float) -> dict:
@@ -218,7 +234,7 @@ def pysph_3d_boxes(dx: float) -> dict:
 
 
 def build_ours_3d(dx: float, R_over_dx: float = 3.0, alpha: float = 0.02, cfl: float = 0.25,
-                  threads: int = 0):
+                  threads: int = 0, pressure: str = "wcsph"):
     """PySPH dam_break_3d (SPHERIC test 2) in sphfem, in the example's coordinates: the
     same fluid and obstacle particles (:func:`pysph_3d_boxes`; the obstacle filled with
     wall particles), the tank's inside bounded by 3 Adami layers whose inner one sits where
@@ -236,15 +252,16 @@ def build_ours_3d(dx: float, R_over_dx: float = 3.0, alpha: float = 0.02, cfl: f
     xo = lattice(*b["obstacle"], dx)
     c0 = 10.0 * math.sqrt(2 * G * H)  # the example's c0 = 10 sqrt(2 g H)
     top = b["fluid"][1][2]
-    rhof = hydrostatic_density(top - xf[:, 2], 1000.0, c0, G)
+    rhof = (hydrostatic_density(top - xf[:, 2], 1000.0, c0, G) if pressure == "wcsph"
+            else None)
     ps = make_particles(xf, np.vstack([xw, xo]), dx, 1000.0, rhof)
     par = FluidParams(c0=c0, mu=1e-3, gravity=(0.0, 0.0, -G), alpha=alpha, cfl=cfl,
-                      threads=threads)
+                      threads=threads, pressure=pressure)
     m = (layers + 1) * dx
     lo, hi = b["tank"]
     s = FluidSolver(ps, R_over_dx * dx, [lo[0] - m, lo[1] - m, lo[2] - m],
                     [hi[0] + m, hi[1] + m, 2.0], params=par)
-    return s, lo[0]
+    return _fluid_start(s, top, pressure), lo[0]
 
 
 def ours_worker(a) -> dict:
@@ -255,7 +272,7 @@ def ours_worker(a) -> dict:
 
     t0 = time.perf_counter()
     build = build_ours_2d if a.case == "2d" else build_ours_3d
-    s, x_face = build(a.dx, a.R_over_dx, a.alpha, a.cfl, a.ours_threads)
+    s, x_face = build(a.dx, a.R_over_dx, a.alpha, a.cfl, a.ours_threads, a.pressure[0])
     setup_s = time.perf_counter() - t0
     fl = s.p.kind == FLUID
 
@@ -287,7 +304,8 @@ def ours_worker(a) -> dict:
     dt = np.asarray(dts)
     d = s.diagnostics()
     return {
-        "code": "sphfem", "case": a.case, "dx": a.dx, "R_over_dx": a.R_over_dx,
+        "code": "sphfem", "case": a.case, "pressure": a.pressure[0], "dx": a.dx,
+        "R_over_dx": a.R_over_dx,
         "alpha": a.alpha, "cfl": a.cfl, "c0": s.params.c0,
         "n_fluid": int(fl.sum()), "n_total": int(s.p.n), "threads_fluid": s.nthreads,
         "numba_threads": numba.get_num_threads(), "setup_s": setup_s, "solve_s": solve_s,
@@ -298,6 +316,7 @@ def ours_worker(a) -> dict:
         "neighbor_rebuilds": s.n_rebuilds - rebuilds0,
         "neighbor_share": wall["neighbors"] / solve_s,
         "rho_ratio_range": d["rho_ratio_range"], "max_speed": d["max_speed"],
+        "pressure_solve": d.get("pressure_solve"),  # projection: iterations, density error
         "loadavg_end": loadavg(),
     }
 
@@ -383,11 +402,11 @@ def run_pysph(python, case, dx, t_end, sample, threads, wait_policy, timeout=720
 
 
 def run_ours(case, dx, t_end, sample, threads, R_over_dx, alpha, cfl, wait_policy,
-             ours_threads, timeout=7200) -> dict:
+             ours_threads, pressure="wcsph", timeout=7200) -> dict:
     cmd = [sys.executable, os.path.abspath(__file__), "--ours-worker", "--case", case,
            "--dx", repr(dx), "--t-end", repr(t_end), "--sample", repr(sample),
            "--R-over-dx", repr(R_over_dx), "--alpha", repr(alpha), "--cfl", repr(cfl),
-           "--ours-threads", str(ours_threads)]
+           "--ours-threads", str(ours_threads), "--pressure", pressure]
     env = {"NUMBA_NUM_THREADS": str(threads)}
     if wait_policy:  # numba's threading layer is OpenMP here too: the same policy
         env["OMP_WAIT_POLICY"] = wait_policy
@@ -479,6 +498,8 @@ def markdown(res) -> str:
             L.append(f"{lab}, fastest run, where the stepping time goes (the fluid module's "
                      "timers): " + ", ".join(f"{k} {v:.2f} s ({100 * v / r['solve_s']:.1f} %)"
                                              for k, v in w.items())
+                     + (f"; pressure solve {json.dumps(r['pressure_solve'])}"
+                        if r.get("pressure_solve") else "")
                      + f"; {r['neighbor_rebuilds']} list rebuilds in {r['steps']} steps "
                      f"(one per {r['steps'] / max(1, r['neighbor_rebuilds']):.1f}); "
                      f"controlling dt limit: {r['controlling_limit_counts']}.\n")
@@ -551,6 +572,11 @@ def main(argv=None):
     ap.add_argument("--cfl", type=float, nargs="+", default=[0.25],
                     help="[time] cfl of ours; several: one sphfem variant each (the first "
                          "is the recommended setting)")
+    ap.add_argument("--pressure", nargs="+", default=["wcsph"],
+                    choices=["wcsph", "iisph", "dfsph"],
+                    help="[fluid] pressure method(s) of ours; one sphfem variant per method "
+                         "and cfl (a projection method's cfl bounds h / |v|max, not the "
+                         "acoustic limit)")
     ap.add_argument("--pysph-python", default="/tmp/pysph-venv/bin/python")
     ap.add_argument("--omp-wait-policy", default="PASSIVE",
                     help="OMP_WAIT_POLICY of both codes' workers ('' = unset: GNU OpenMP's "
@@ -601,15 +627,17 @@ def main(argv=None):
         t_end = per_case(a.t_end, case, "tf")
         runs = []
         for rnd in range(a.rounds):
-            for code, cfl in [("pysph", None)] + [("sphfem", c) for c in a.cfl]:
+            for code, cfl, pm in [("pysph", None, None)] + [
+                    ("sphfem", c, m) for m in a.pressure for c in a.cfl]:
                 if code == "pysph":
                     r = run_pysph(a.pysph_python, case, dx, t_end, a.sample, a.threads,
                                   a.omp_wait_policy)
                     r["label"] = "pysph"
                 else:
                     r = run_ours(case, dx, t_end, a.sample, a.threads, a.R_over_dx,
-                                 a.alpha, cfl, a.omp_wait_policy, a.ours_threads)
-                    r["label"] = f"sphfem cfl={cfl:g}"
+                                 a.alpha, cfl, a.omp_wait_policy, a.ours_threads, pm)
+                    r["label"] = ("sphfem " + ("" if pm == "wcsph" else pm + " ")
+                                  + f"cfl={cfl:g}")
                 r["round"] = rnd
                 add_errors(r, case)
                 runs.append(r)

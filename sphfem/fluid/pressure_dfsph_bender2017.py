@@ -63,7 +63,6 @@ wall terms.  Iterations, final density and divergence errors per step are in
 from __future__ import annotations
 
 import logging
-import time
 
 import numpy as np
 from numba import njit, prange
@@ -182,11 +181,7 @@ def warm_start(solver, state: ProjectionState, w, dt: float) -> None:
 
 
 def _solve(solver, dt: float, state):
-    t0 = time.perf_counter()
-    st = _solve_timed(solver, dt, state)
-    solver.wall["pressure_solve"] = solver.wall.get("pressure_solve", 0.0) + (
-        time.perf_counter() - t0)
-    return st
+    return projection.timed_solve(_solve_timed, solver, dt, state)
 
 
 def _solve_timed(solver, dt: float, state):

@@ -31,7 +31,6 @@ error per step are in ``diagnostics()["pressure_solve"]``.
 from __future__ import annotations
 
 import logging
-import time
 
 from numba import njit, prange
 
@@ -90,11 +89,7 @@ def relaxed_jacobi(p, rho_pred, rho, A, kind, rho0, dt, omega):
 
 
 def _solve(solver, dt: float, state):
-    t0 = time.perf_counter()
-    st = _solve_timed(solver, dt, state)
-    solver.wall["pressure_solve"] = solver.wall.get("pressure_solve", 0.0) + (
-        time.perf_counter() - t0)
-    return st
+    return projection.timed_solve(_solve_timed, solver, dt, state)
 
 
 def _solve_timed(solver, dt: float, state):
