@@ -124,6 +124,8 @@ def pysph_worker(a) -> dict:
         app = mod.DamBreak3D(fname=name, output_dir=outdir)
     argv = ["--dx", repr(a.dx), "--tf", repr(a.t_end), "--disable-output", "-q",
             "-d", outdir, "--openmp"]
+    if a.pysph_scheme[0] != "wcsph":  # dam_break_2d's SchemeChooser (3D: WCSPH only)
+        argv += ["--scheme", a.pysph_scheme[0]]
     t0 = time.perf_counter()
     app.setup(argv)
     setup_s = time.perf_counter() - t0
@@ -152,7 +154,8 @@ def pysph_worker(a) -> dict:
     solver = app.solver
     dt = np.asarray(dts)
     return {
-        "code": "pysph", "case": a.case, "example": name, "dx": a.dx,
+        "code": "pysph", "case": a.case, "example": name, "scheme": a.pysph_scheme[0],
+        "dx": a.dx,
         "n_by_array": n_by, "n_fluid": n_by["fluid"], "n_total": sum(n_by.values()),
         "integrator": type(solver.integrator).__name__,
         "h": float(fluid.h.max()), "kernel": type(solver.kernel).__name__,
@@ -392,9 +395,11 @@ def _run(cmd, env_extra, timeout) -> dict:
     return r
 
 
-def run_pysph(python, case, dx, t_end, sample, threads, wait_policy, timeout=7200) -> dict:
+def run_pysph(python, case, dx, t_end, sample, threads, wait_policy, scheme="wcsph",
+              timeout=7200) -> dict:
     cmd = [python, os.path.abspath(__file__), "--pysph-worker", "--case", case,
-           "--dx", repr(dx), "--t-end", repr(t_end), "--sample", repr(sample)]
+           "--dx", repr(dx), "--t-end", repr(t_end), "--sample", repr(sample),
+           "--pysph-scheme", scheme]
     env = {"OMP_NUM_THREADS": str(threads)}
     if wait_policy:
         env["OMP_WAIT_POLICY"] = wait_policy
@@ -440,8 +445,10 @@ def summarise(runs) -> dict:
                     "cpu_min_s": min(c), "steps": rs[0]["steps"]}
     p = out.get("pysph")
     for lab, o in out.items():
-        if lab == "pysph" or p is None:
+        if lab.startswith("pysph") or p is None:
             continue
+        o["speedup_min_vs"] = {q: out[q]["min_s"] / o["min_s"] for q in out
+                               if q.startswith("pysph")}
         o["speedup_min"] = p["min_s"] / o["min_s"]
         o["speedup_median"] = p["median_s"] / o["median_s"]
         o["speedup_cpu"] = p["cpu_min_s"] / o["cpu_min_s"]
@@ -490,7 +497,10 @@ def markdown(res) -> str:
             L.append(f"* PySPH / {lab}: wall **{o['speedup_min']:.2f}x** (minima), "
                      f"{o['speedup_median']:.2f}x (medians), CPU seconds "
                      f"{o['speedup_cpu']:.2f}x; steps ratio {o['steps_ratio']:.2f}, wall "
-                     f"cost per step ratio {o['per_step_cost_ratio']:.2f}.")
+                     f"cost per step ratio {o['per_step_cost_ratio']:.2f}"
+                     + "".join(f"; {q} / {lab}: {v:.2f}x"
+                               for q, v in o.get("speedup_min_vs", {}).items() if q != "pysph")
+                     + ".")
         L.append("")
         for lab in dict.fromkeys(r["label"] for r in cr["runs"] if r["code"] == "sphfem"):
             r = min((r for r in cr["runs"] if r["label"] == lab), key=lambda r: r["solve_s"])
@@ -577,6 +587,10 @@ def main(argv=None):
                     help="[fluid] pressure method(s) of ours; one sphfem variant per method "
                          "and cfl (a projection method's cfl bounds h / |v|max, not the "
                          "acoustic limit)")
+    ap.add_argument("--pysph-scheme", nargs="+", default=["wcsph"],
+                    help="PySPH schemes of dam_break_2d (its --scheme: wcsph, the example's "
+                         "default, iisph, ...); one PySPH variant each, the first the "
+                         "baseline of the ratios; dam_break_3d has WCSPH only")
     ap.add_argument("--pysph-python", default="/tmp/pysph-venv/bin/python")
     ap.add_argument("--omp-wait-policy", default="PASSIVE",
                     help="OMP_WAIT_POLICY of both codes' workers ('' = unset: GNU OpenMP's "
@@ -627,12 +641,13 @@ def main(argv=None):
         t_end = per_case(a.t_end, case, "tf")
         runs = []
         for rnd in range(a.rounds):
-            for code, cfl, pm in [("pysph", None, None)] + [
+            schemes = a.pysph_scheme if case == "2d" else ["wcsph"]
+            for code, cfl, pm in [("pysph", None, sc) for sc in schemes] + [
                     ("sphfem", c, m) for m in a.pressure for c in a.cfl]:
                 if code == "pysph":
                     r = run_pysph(a.pysph_python, case, dx, t_end, a.sample, a.threads,
-                                  a.omp_wait_policy)
-                    r["label"] = "pysph"
+                                  a.omp_wait_policy, pm)
+                    r["label"] = "pysph" if pm == schemes[0] else f"pysph {pm}"
                 else:
                     r = run_ours(case, dx, t_end, a.sample, a.threads, a.R_over_dx,
                                  a.alpha, cfl, a.omp_wait_policy, a.ours_threads, pm)
