@@ -145,3 +145,41 @@ def test_the_scene_module_takes_debris_out_of_the_heat_and_reports_it(short_coup
     assert np.flatnonzero(s.inert).tolist() == sorted(top.tolist())
     # the checkpoint written before makes no ring inert; the later one does
     assert state["_inert"].size == 0
+
+
+def _debris_over_a_wall(no_penetration):
+    """A 10 x 4 block of rings at rest on a 3-row wall (z < 0, normals +z) and one ring
+    flying at (2, -5) m/s from 6 dx above the wall at r = 40 dx, made inert at once."""
+    body = _block(0.5 * DX, 0.5 * DX, 10, 4)
+    drop = np.array([[40.0, 6.0]]) * DX
+    walls = _block(0.5 * DX, -2.5 * DX, 80, 3)
+    x = np.vstack([body, drop, walls])
+    nf = len(body) + 1
+    kind = np.array([FLUID] * nf + [WALL] * len(walls), np.int8)
+    v = np.zeros_like(x)
+    v[nf - 1] = (2.0, -5.0)
+    rho = np.full(len(x), 1000.0)
+    M = rho * DX * DX * 2 * np.pi * x[:, 0]
+    nrm = np.where((kind == WALL)[:, None], [0.0, 1.0], 0.0)
+    pa = FluidParams(rho0=1000.0, c0=100.0, mu=3e-4, delta=0.1, alpha=0.02)
+    f = AxisymmetricFluid(x, v, rho, kind, M, DX * DX, 3 * DX, pa, wall_normals=nrm,
+                          no_penetration=no_penetration, axis_floor=0.25 * DX)
+    f.make_inert([nf - 1])
+    return f, nf - 1
+
+
+@pytest.mark.parametrize("no_penetration", [True, False])
+def test_inert_debris_lands_on_a_particle_wall(no_penetration):
+    """Inert debris is held out of a particle wall as the fluid is (``no_penetration``): it
+    lands on the surface z = 0 and slides on with its radial velocity; without the option
+    it flies through the wall (the D/dx 256 impact had 25 debris rings under its wall)."""
+    f, i = _debris_over_a_wall(no_penetration)
+    t_land = 6.0 * DX / 5.0
+    while f.t < 2.0 * t_land:
+        f.step(min(f.stable_dt(), 0.05 * t_land))
+    if no_penetration:
+        assert f.x[i, 1] == pytest.approx(0.0, abs=1e-9 * DX)  # on the wall's surface
+        assert abs(f.v[i, 1]) < 1e-12 and f.v[i, 0] == pytest.approx(2.0, rel=1e-12)
+        assert f.x[i, 0] == pytest.approx(40.0 * DX + 2.0 * f.t, rel=1e-9)
+    else:
+        assert f.x[i, 1] < -3.0 * DX  # through the three rows

@@ -1526,12 +1526,18 @@ class AxisymmetricFluid:
 
     def _fly_inert(self, dt: float) -> None:
         """Ballistic flight of the inert rings over dt under gravity, reflected at the axis
-        (and the wall plane)."""
+        (and the wall plane), and held out of particle walls with normals as the fluid is
+        (``no_penetration``: put back on the surface, the inward normal velocity removed,
+        so debris that lands slides along the wall instead of flying through it)."""
         q = np.flatnonzero(self.inert)
         self.x[q] += dt * self.v[q] + 0.5 * dt * dt * self.gravity
         self.v[q] += dt * self.gravity
         _reflect_axis(q, self.x, self.v, self.wall_z is not None,
                       0.0 if self.wall_z is None else self.wall_z, self.axis_floor)
+        if self.no_penetration is not None and q.size:
+            xs, vs = np.take(self.x, q, axis=0), np.take(self.v, q, axis=0)
+            if self.no_penetration.apply(xs, vs):
+                self.x[q], self.v[q] = xs, vs
 
     def run(self, t_end: float, callback=None, every: float | None = None) -> int:
         """Step to ``t_end`` with the stable step, ``callback(self)`` every ``every`` s."""
