@@ -25,17 +25,11 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
 
-
-def frames(run: Path) -> list[tuple[float, Path]]:
-    """(time [s], VTU path) of a run's particle series, in time order."""
-    root = ET.parse(run / "particles.pvd").getroot()
-    out = [(float(e.get("timestep")), run / e.get("file")) for e in root.iter("DataSet")]
-    return sorted(out)
+from sphfem.api import Result
 
 
 def per_diameter(run: Path) -> int:
@@ -88,7 +82,7 @@ def main(argv=None) -> int:
             ap.error(f"{run}: no particles.pvd (a level folder of convergence.py)")
         dx = a.diameter / per_diameter(run)
         rows = []
-        for t, f in frames(run):
+        for t, f in Result(run, {}).frames():  # a stopped run has no summary.json
             if t <= 0.0:  # the set-up frame: no contact yet
                 continue
             if t / tc > a.t_max_tc:

@@ -1481,12 +1481,19 @@ class AxisymmetricFluid:
                       0.0 if self.wall_z is None else self.wall_z, self.axis_floor)
         if self.Lz:
             self.x[:, 1] = self.z0 + np.mod(self.x[:, 1] - self.z0, self.Lz)
-        if self.no_penetration is not None:
-            fi = self._fidx
-            xs, vs = np.take(self.x, fi, axis=0), np.take(self.v, fi, axis=0)
-            if self.no_penetration.apply(xs, vs):
-                self.penetration_corrections += 1
-                self.x[fi], self.v[fi] = xs, vs
+        if self._hold_out_of_walls(self._fidx):
+            self.penetration_corrections += 1
+
+    def _hold_out_of_walls(self, rows) -> bool:
+        """``no_penetration`` on ``rows``: those found under a particle wall's surface are
+        put back on it and lose their inward normal velocity; True when any was moved."""
+        if self.no_penetration is None or not rows.size:
+            return False
+        xs, vs = np.take(self.x, rows, axis=0), np.take(self.v, rows, axis=0)
+        if not self.no_penetration.apply(xs, vs):
+            return False
+        self.x[rows], self.v[rows] = xs, vs
+        return True
 
     #: steps between two debris searches (``debris_rings``)
     DEBRIS_EVERY = 20
@@ -1534,10 +1541,7 @@ class AxisymmetricFluid:
         self.v[q] += dt * self.gravity
         _reflect_axis(q, self.x, self.v, self.wall_z is not None,
                       0.0 if self.wall_z is None else self.wall_z, self.axis_floor)
-        if self.no_penetration is not None and q.size:
-            xs, vs = np.take(self.x, q, axis=0), np.take(self.v, q, axis=0)
-            if self.no_penetration.apply(xs, vs):
-                self.x[q], self.v[q] = xs, vs
+        self._hold_out_of_walls(q)
 
     def run(self, t_end: float, callback=None, every: float | None = None) -> int:
         """Step to ``t_end`` with the stable step, ``callback(self)`` every ``every`` s."""
