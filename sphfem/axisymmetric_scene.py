@@ -276,7 +276,9 @@ class AxisymmetricFluidModule(PhysicsModule):
     # focused on the axis, where they threw surface rings off (debris at 1.5-2.25 t_c).
     # With 0.5 the field is the smooth stagnation flow's (docs/validation/droplet_impact,
     # session 27); its bulk stress is ~0.5 (h / c0) / T of the pressure of a flow changing
-    # over T (0.4 % at D/dx 181 for T = 0.1 t_c), and it vanishes with h
+    # over T (0.4 % at D/dx 181 for T = 0.1 t_c), and it vanishes with h; the scene keys
+    # fluid.bulk_damping (alpha_b, replaces this 0.5) and fluid.bulk_damping_length (a floor
+    # l under h: nu_b = alpha_b c0 max(h, l)) change it per scene
     # wall_tension "contact-line": the walls keep the fluid's tension (the axis corner, a thin
     # film) except under a contact line, where the wall's suction held the foot back: with
     # the tension everywhere the 10 m/s contact line stalled at D/dx 181 from 0.8 t_c
@@ -295,7 +297,7 @@ class AxisymmetricFluidModule(PhysicsModule):
         "shifting", "shift_surface", "shift_speed", "skin", "shift_surface_lambda",
         "shift_drift", "wall_friction", "film_tension", "axis_floor", "stress_plane",
         "contact_line_slip", "contact_line_slip_length", "wall_slip", "slip_length",
-        "csf_meridian"})
+        "csf_meridian", "bulk_damping_length"})
     #: rings are kept at r >= AXIS_FLOOR_DX dx (the fluid's spacing; the lattice's first
     #: column sits at dx / 2): next to the axis a ring's meridian area grows as 1 / r and its
     #: mirror hardly repels it; without the floor the apex ring of the 10 m/s droplet at
@@ -347,8 +349,14 @@ class AxisymmetricFluidModule(PhysicsModule):
         self._domain = (np.asarray(scene.domain.lo, float), np.asarray(scene.domain.hi, float))
 
     def _options(self) -> dict:
-        """``fluid_options`` with the scene's ``csf_meridian``."""
-        return {**self.fluid_options, "csf_meridian": self.scene.fluid.csf_meridian}
+        """``fluid_options`` with the scene's ``csf_meridian``, ``bulk_damping`` (when
+        set) and ``bulk_damping_length``."""
+        fl = self.scene.fluid
+        opts = {**self.fluid_options, "csf_meridian": fl.csf_meridian,
+                "bulk_damping_length": fl.bulk_damping_length}
+        if fl.bulk_damping is not None:
+            opts["bulk_damping"] = fl.bulk_damping
+        return opts
 
     def fields(self):
         f = np.float64

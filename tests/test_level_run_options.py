@@ -85,7 +85,44 @@ def test_module_keywords_are_its_call(monkeypatch):
         d.pop(key, None)
     with pytest.raises(RuntimeError, match="recorded"):
         Simulation(parse_scene(d)).run(None, progress=False)
-    options = set(AxisymmetricFluidModule.fluid_options) | {"csf_meridian"}
-    assert set(seen) - options == AxisymmetricFluidModule.SCENE_KEYWORDS - {"csf_meridian"}
+    merged = {"csf_meridian", "bulk_damping_length"}  # scene keys _options merges
+    options = set(AxisymmetricFluidModule.fluid_options) | merged
+    assert set(seen) - options == AxisymmetricFluidModule.SCENE_KEYWORDS - merged
     assert not (set(AxisymmetricFluidModule.fluid_options)
                 & AxisymmetricFluidModule.SCENE_KEYWORDS)
+
+
+def test_bulk_damping_scene_keys_reach_the_solver(monkeypatch):
+    """``fluid.bulk_damping`` and ``fluid.bulk_damping_length`` of an axisymmetric scene are
+    the solver's keywords (unset: the module's alpha_b); in a planar scene they are errors
+    naming the key."""
+    from builders import as_planar_scene
+
+    import sphfem.fluid.axisymmetric as fa
+    from sphfem.scene import SceneError, parse_scene
+    from sphfem.simulation import Simulation
+    from sphfem.validation.droplet_impact import scene_at
+
+    seen = {}
+
+    class Recorder:
+        def __init__(self, *args, **kw):
+            seen.update(kw)
+            raise RuntimeError("recorded")
+
+    monkeypatch.setattr(fa, "AxisymmetricFluid", Recorder)
+    for overrides, alpha_b, length in (
+            ([], AxisymmetricFluidModule.fluid_options["bulk_damping"], 0.0),
+            (["fluid.bulk_damping=1.0", "fluid.bulk_damping_length=2.5e-7"], 1.0, 2.5e-7)):
+        d = scene_at(10.0, 16, 0.05, overrides=overrides)
+        d["physics"]["modules"] = ["fluid"]
+        for key in ("heat", "coupling"):
+            d.pop(key, None)
+        with pytest.raises(RuntimeError, match="recorded"):
+            Simulation(parse_scene(d)).run(None, progress=False)
+        assert seen["bulk_damping"] == alpha_b and seen["bulk_damping_length"] == length
+    d = as_planar_scene(scene_at(10.0, 16, 0.05, overrides=["fluid.bulk_damping_length=1e-7",
+                                                          "fluid.wall_friction=sph"]))
+    with pytest.raises(SceneError) as e:
+        parse_scene(d)
+    assert e.value.key == "fluid.bulk_damping_length"

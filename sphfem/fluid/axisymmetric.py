@@ -783,12 +783,18 @@ class AxisymmetricFluid:
 
     ``bulk_damping`` (alpha_b > 0): an acoustic damper, the bulk viscous stress
     Pi_i = -rho_i nu_b,i (div v)_i = nu_b,i (D rho / D t)_i added to the pressure of the
-    fluid rows in the momentum equation, nu_b,i = alpha_b h_i c0 (h_i = R_i / 2), the
+    fluid rows in the momentum equation, nu_b,i = alpha_b c0 max(h_i, l) (h_i = R_i / 2; l =
+    ``bulk_damping_length``, 0 by default, so the damper vanishes with h), the
     density rate of the previous evaluation (a bulk viscosity zeta = rho nu_b: it acts on
     the compressible part of the flow alone, so it damps the artificial acoustic waves of a
     weakly compressible fluid, mode k at the rate nu_b k^2 / 2 beyond the delta term's,
     and leaves a divergence-free flow as it is; cf. Sun et al. 2023, J. Comput. Phys. 483,
     112056, who add such a term to delta-SPH).  Time step: nu_b enters the viscous limit.
+    A length l > h holds the damping of a wave of given wavelength fixed as the spacing
+    shrinks: a bulk viscosity zeta = rho alpha_b c0 l of the artificially compressible
+    fluid, which converges to a damped (not an undamped) acoustic field; in the 10 m/s
+    impact at D/dx 256 l = h of D/dx 128 cut the axis' breathing-mode ringing by ~30 %
+    (docs/validation/droplet_impact, session 34).
     The walls' pressure and the output ``p`` stay the equation of state's.
 
     ``skin`` (> 0): a Verlet list (Verlet 1967): the neighbour list and the axis mirrors
@@ -831,7 +837,8 @@ class AxisymmetricFluid:
                  axis_alpha: float = 0.0, csf_meridian: str = "csf",
                  shift_surface_lambda: float = 0.75, shift_drift: str = "kept",
                  axis_floor: float = 0.0, stress_plane: float | None = None,
-                 bulk_damping: float = 0.0, debris_rings: int = 0,
+                 bulk_damping: float = 0.0, bulk_damping_length: float = 0.0,
+                 debris_rings: int = 0,
                  contact_line_slip: bool = False, contact_line_slip_length: float = 0.0,
                  wall_slip: str = "no-slip", slip_length: float = 0.0):
         self.x = np.array(x, dtype=np.float64)
@@ -897,6 +904,11 @@ class AxisymmetricFluid:
         if not (bulk_damping >= 0.0 and math.isfinite(bulk_damping)):
             raise ValueError(f"bulk_damping must be a finite number >= 0, got {bulk_damping!r}")
         self.bulk_damping = float(bulk_damping)
+        if not (bulk_damping_length >= 0.0 and math.isfinite(bulk_damping_length)):
+            raise ValueError(f"bulk_damping_length must be a finite length >= 0 [m], got "
+                             f"{bulk_damping_length!r}")
+        #: the damper's length floor l [m]: nu_b,i = alpha_b c0 max(h_i, l) (0: h_i)
+        self.bulk_damping_length = float(bulk_damping_length)
         if not (isinstance(debris_rings, (int, np.integer)) and debris_rings >= 0):
             raise ValueError(f"debris_rings must be an integer >= 0, got {debris_rings!r}")
         if debris_rings and periodic_z is not None:
@@ -1212,7 +1224,8 @@ class AxisymmetricFluid:
             Bm[:, :3] = (1.0, 0.0, 1.0)
         p_eos = p[:n].copy() if self.bulk_damping > 0.0 else p[:n]
         if self.bulk_damping > 0.0:  # the acoustic damper's bulk stress (class docstring)
-            p[:n][fl] += (self.bulk_damping * 0.5 * self.Rp[fl] * pa.c0) * self.drho[fl]
+            lb = np.maximum(0.5 * self.Rp[fl], self.bulk_damping_length)
+            p[:n][fl] += (self.bulk_damping * lb * pa.c0) * self.drho[fl]  # = before for l = 0
         _fill_mirrors(n, src, mtype, zw, self.gravity[1], x, v, vg, rho, p, A, mt, mu, gr, dvdr,
                       Rp)
         vd = self._divergence_velocity(v, vga, src, mtype)
@@ -1349,8 +1362,9 @@ class AxisymmetricFluid:
         lim = {"acoustic": pa.cfl * h / (pa.c0 + vmax)}
         if pa.mu > 0:
             lim["viscous"] = pa.visc_cfl * h**2 * rhomin / pa.mu
-        if self.bulk_damping > 0.0:  # nu_b = alpha_b h c0 (h of the largest support)
+        if self.bulk_damping > 0.0:  # nu_b = alpha_b c0 max(h, l) (h of the largest support)
             hb = 0.5 * float(self.Rp[self._fidx].max()) if self._fidx.size else h
+            hb = max(hb, self.bulk_damping_length)
             lim["bulk"] = pa.visc_cfl * h**2 / (self.bulk_damping * hb * pa.c0)
         if amax > 0:
             lim["force"] = pa.force_cfl * math.sqrt(h / amax)

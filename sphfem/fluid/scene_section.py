@@ -54,6 +54,10 @@ def _check(rec, ctx, path):
         ctx.error(f"{path}.wall_slip", f"wall_slip = \"{rec.wall_slip}\" in an axisymmetric "
                   "scene acts on the plain viscous wall term: it needs wall_friction = "
                   f"\"viscous\" (got \"{rec.wall_friction}\")")
+    for key in ("bulk_damping", "bulk_damping_length"):
+        if getattr(rec, key) and getattr(meta, "geometry", None) != "axisymmetric":
+            ctx.error(f"{path}.{key}", f"{key} is implemented for geometry = "
+                      "\"axisymmetric\" only")
     if rec.film_tension and getattr(meta, "geometry", None) != "axisymmetric":
         ctx.error(f"{path}.film_tension", "film_tension is implemented for geometry = "
                   "\"axisymmetric\" only")
@@ -129,6 +133,18 @@ FLUID = Section("fluid", (
     Param("contact_line_slip_length", float, 1.0e-9, gt=0.0, unit="m",
           doc="slip length lambda [m] of contact_line = \"cox-voinov\": the molecular scale "
               "where the wedge's viscous stress is cut off"),
+    Param("bulk_damping", float, None, ge=0.0,
+          doc="axisymmetric fluid: alpha_b of the acoustic damper, a bulk viscous stress "
+              "nu_b D rho / D t added to the fluid's pressure in the momentum equation with "
+              "nu_b = alpha_b c0 max(h, bulk_damping_length) (sphfem.fluid.axisymmetric."
+              "AxisymmetricFluid); it acts on the compressible part of the flow alone and "
+              "damps the artificial acoustic waves of the weakly compressible fluid; unset: "
+              "the module's 0.5; 0 = off"),
+    Param("bulk_damping_length", float, 0.0, ge=0.0, unit="m", quantity="length",
+          doc="axisymmetric fluid: the acoustic damper's length floor l [m], nu_b = alpha_b "
+              "c0 max(h, l); 0 = h, so the damper vanishes with the spacing; l > h holds the "
+              "damping of a given wavelength fixed under refinement (a bulk viscosity rho "
+              "alpha_b c0 l; it enters the time step as a viscous limit)"),
     Param("film_tension", bool, False,
           doc="axisymmetric CSF: films thinner than about the kernel support carry the "
               "line tension of their faces as a membrane stress (2 sigma free, sigma on a "
