@@ -200,7 +200,7 @@ def _solve_timed(solver, dt: float, state):
     projection.add_wall_hydrostatic(solver, w, dt, g)
     warm_start(solver, st, w, dt)
     it, err = jacobi(solver, w, dt, True, 0.01 * pa.dfsph_tolerance, MIN_ITERATIONS_DENSITY,
-                     pa.dfsph_max_iterations, relax, projection.carried_weight(st, dt))
+                     pa.dfsph_max_iterations, relax, projection.carried_weight(st, dt, solver))
     st.warm.put(p.id[fl], (w.rho * w.Q)[fl])  # kappa of the density solve
     st.warm_v.put(p.id[fl], (dt * w.rho * w.Qv)[fl])  # dt kappa^v of the divergence solve
     q = w.Q + w.Qv

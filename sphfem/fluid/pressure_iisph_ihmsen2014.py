@@ -103,7 +103,7 @@ def _solve_timed(solver, dt: float, state):
     projection.add_wall_hydrostatic(solver, w, dt, g)
     density_rate(p.v, *pairs, w.rate)
     rho_adv = w.Qv  # work array: rho^adv
-    beta = projection.carried_weight(st, dt)
+    beta = projection.carried_weight(st, dt, solver)
     rho_adv[:] = rho0 + beta * (w.rho - rho0) + dt * w.rate
     P = w.Q  # the pressure being solved for (warm start from the last step's)
     P[:] = 0.0
