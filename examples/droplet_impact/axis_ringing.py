@@ -60,7 +60,12 @@ def frame_figures(path: Path, dx: float, rho_v2: float, axis_dx: float) -> dict:
 
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("runs", nargs="+", type=Path, help="level folders (OUT/V10_n256)")
+    ap.add_argument("runs", nargs="*", type=Path, help="level folders (OUT/V10_n256)")
+    ap.add_argument("--from-json", nargs="+", type=Path, default=[],
+                    help="earlier --json outputs whose runs join the table and figure "
+                         "(e.g. docs/validation/droplet_impact/session34/axis_ringing.json)")
+    ap.add_argument("--only", nargs="+", default=None,
+                    help="of the --from-json runs, only these labels")
     ap.add_argument("--label", nargs="+", default=None, help="one label per run")
     ap.add_argument("--speed", type=float, default=10.0, help="impact speed V [m/s]")
     ap.add_argument("--diameter", type=float, default=1e-4, help="droplet diameter D [m]")
@@ -77,6 +82,17 @@ def main(argv=None) -> int:
     tc = a.diameter / a.speed
     rho_v2 = a.rho0 * a.speed**2
     res = {"speed": a.speed, "diameter": a.diameter, "axis_dx": a.axis_dx, "runs": {}}
+    for path in a.from_json:
+        old = json.loads(path.read_text())
+        for key in ("speed", "diameter", "axis_dx"):
+            if old[key] != res[key]:
+                ap.error(f"--from-json {path}: {key} {old[key]} differs from {res[key]}")
+        for lab, rr in old["runs"].items():
+            if a.only is None or lab in a.only:
+                res["runs"][lab] = {**rr, "frames": [r for r in rr["frames"]
+                                                     if r["t_tc"] <= a.t_max_tc]}
+    if not a.runs and not res["runs"]:
+        ap.error("no runs: give level folders or --from-json")
     for run, lab in zip(a.runs, labels, strict=True):
         if not (run / "particles.pvd").is_file():
             ap.error(f"{run}: no particles.pvd (a level folder of convergence.py)")
