@@ -62,10 +62,10 @@ def test_scene_overrides_index_lists():
         apply_overrides(d, ["blocks.droplet.sampling=shells"])
 
 
-def test_module_keywords_are_its_call(monkeypatch):
-    """AxisymmetricFluidModule passes the solver exactly its SCENE_KEYWORDS plus
-    ``fluid_options`` (and csf_meridian, a scene key it merges into them), so level_run's
-    list of settable options cannot drift from the module's call."""
+def _solver_keywords(monkeypatch, overrides=()) -> dict:
+    """The keywords AxisymmetricFluidModule builds its AxisymmetricFluid with, for the
+    fluid-only 10 m/s droplet scene at D/dx 16 with ``overrides`` (the solver is replaced
+    by a recorder that stops the run)."""
     import sphfem.fluid.axisymmetric as fa
     from sphfem.scene import parse_scene
     from sphfem.simulation import Simulation
@@ -79,12 +79,20 @@ def test_module_keywords_are_its_call(monkeypatch):
             raise RuntimeError("recorded")
 
     monkeypatch.setattr(fa, "AxisymmetricFluid", Recorder)
-    d = scene_at(10.0, 16, 0.05)
+    d = scene_at(10.0, 16, 0.05, overrides=list(overrides))
     d["physics"]["modules"] = ["fluid"]
     for key in ("heat", "coupling"):
         d.pop(key, None)
     with pytest.raises(RuntimeError, match="recorded"):
         Simulation(parse_scene(d)).run(None, progress=False)
+    return seen
+
+
+def test_module_keywords_are_its_call(monkeypatch):
+    """AxisymmetricFluidModule passes the solver exactly its SCENE_KEYWORDS plus
+    ``fluid_options`` (and csf_meridian and bulk_damping_length, scene keys it merges into
+    them), so level_run's list of settable options cannot drift from the module's call."""
+    seen = _solver_keywords(monkeypatch)
     merged = {"csf_meridian", "bulk_damping_length"}  # scene keys _options merges
     options = set(AxisymmetricFluidModule.fluid_options) | merged
     assert set(seen) - options == AxisymmetricFluidModule.SCENE_KEYWORDS - merged
@@ -98,28 +106,13 @@ def test_bulk_damping_scene_keys_reach_the_solver(monkeypatch):
     naming the key."""
     from builders import as_planar_scene
 
-    import sphfem.fluid.axisymmetric as fa
     from sphfem.scene import SceneError, parse_scene
-    from sphfem.simulation import Simulation
     from sphfem.validation.droplet_impact import scene_at
 
-    seen = {}
-
-    class Recorder:
-        def __init__(self, *args, **kw):
-            seen.update(kw)
-            raise RuntimeError("recorded")
-
-    monkeypatch.setattr(fa, "AxisymmetricFluid", Recorder)
     for overrides, alpha_b, length in (
             ([], AxisymmetricFluidModule.fluid_options["bulk_damping"], 0.0),
             (["fluid.bulk_damping=1.0", "fluid.bulk_damping_length=2.5e-7"], 1.0, 2.5e-7)):
-        d = scene_at(10.0, 16, 0.05, overrides=overrides)
-        d["physics"]["modules"] = ["fluid"]
-        for key in ("heat", "coupling"):
-            d.pop(key, None)
-        with pytest.raises(RuntimeError, match="recorded"):
-            Simulation(parse_scene(d)).run(None, progress=False)
+        seen = _solver_keywords(monkeypatch, overrides)
         assert seen["bulk_damping"] == alpha_b and seen["bulk_damping_length"] == length
     d = as_planar_scene(scene_at(10.0, 16, 0.05, overrides=["fluid.bulk_damping_length=1e-7",
                                                           "fluid.wall_friction=sph"]))
