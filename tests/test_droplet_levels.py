@@ -149,8 +149,9 @@ def test_convergence_script_reads_levels_from_an_earlier_json(tmp_path, capsys):
 
 def test_convergence_script_runs_one_level_without_criteria(tmp_path, capsys):
     """convergence.py --levels N (one machine per level): the level's figures are printed,
-    no criteria are judged and no convergence file is written; a non-positive level is
-    refused."""
+    no criteria are judged, and the convergence file holds the level's figures with no
+    criteria, readable by a later ``--figures-from`` (the run folders may be gone by then);
+    a non-positive level is refused."""
     import json
 
     conv = _convergence_script()
@@ -165,7 +166,13 @@ def test_convergence_script_runs_one_level_without_criteria(tmp_path, capsys):
     printed = capsys.readouterr().out
     assert "D/dx 90 member 0: spread" in printed and "the criteria need three" in printed
     assert "PASS" not in printed and "FAIL" not in printed
-    assert not (out / "convergence_V10.json").exists()
+    saved = json.loads((out / "convergence_V10.json").read_text())
+    assert saved["levels"] == [90] and saved["criteria"] == {}
+    assert saved["member_figures"][0]["0"]["spread"] == pytest.approx(figs[0]["spread"])
+    again = tmp_path / "again"
+    assert conv.main(["10", "--out", str(again), "--levels", "90", "--t-end-tc", "4",
+                      "--figures-from", str(out / "convergence_V10.json")]) == 0
+    assert "D/dx 90 member 0: figures from" in capsys.readouterr().out
     with pytest.raises(SystemExit):
         conv.main(["10", "--out", str(out), "--levels", "0", "90", "128"])
 

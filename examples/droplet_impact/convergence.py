@@ -42,7 +42,8 @@ file (same speed, same end time) is read from it and not run; the printout marks
 The full case (``sphfem validate droplet-impact``) runs the three speeds in one process;
 this script is the way to run them one at a time, on several machines, or with a finer
 level added: ``--levels 128`` alone runs (or continues) that level and prints its figures,
-without the criteria, which need three levels.
+without the criteria, which need three levels; the figures go to
+``convergence_V{SPEED}.json`` all the same (empty criteria), for a later ``--figures-from``.
 """
 
 from __future__ import annotations
@@ -267,7 +268,34 @@ def main(argv=None) -> int:
         member_figs.append(got)
         if got:
             figs.append(di.ensemble([got[m] for m in sorted(got)]))
+
+    def clean(v):
+        if isinstance(v, (list, tuple)):
+            return [clean(x) for x in v]
+        if isinstance(v, (int, float)) and not isinstance(v, bool):
+            v = float(v)
+            return v if math.isfinite(v) else None
+        return v
+
+    def cleaned(f):
+        return {k: clean(v) for k, v in f.items()}
+
+    def save(crit: dict, notes: list) -> None:
+        """convergence_V{speed}.json: the completed levels' figures (read back by
+        ``--figures-from``) and the criteria (empty below three levels)."""
+        done = [(n, g) for n, g in zip(levels, member_figs, strict=True) if g]
+        write_json(a.out / f"convergence_V{a.speed:g}.json", {
+            "speed": a.speed, "levels": [n for n, _ in done], "members": a.members,
+            "overrides": a.override, "figures": [cleaned(f) for f in figs],
+            "member_figures": [{str(m): cleaned(f) for m, f in g.items()} for _, g in done],
+            "criteria": {k: {"value": clean(float(c.value)), "limit": c.limit, "op": c.op,
+                             "passed": bool(c.passed), "description": c.description}
+                         for k, c in crit.items()},
+            "notes": notes})
+
     if len(levels) < 3 or len(figs) < len(levels):
+        if figs:  # the figures so far, for --figures-from (the run folders may go)
+            save({}, [])
         print(f"{len(figs)} of {len(levels)} level(s) with a completed member: the criteria "
               "need three (run again when they have completed; completed folders are read)")
         return 0
@@ -282,25 +310,7 @@ def main(argv=None) -> int:
     for x in notes:
         print("note:", x)
 
-    def clean(v):
-        if isinstance(v, (list, tuple)):
-            return [clean(x) for x in v]
-        if isinstance(v, (int, float)) and not isinstance(v, bool):
-            v = float(v)
-            return v if math.isfinite(v) else None
-        return v
-
-    def cleaned(f):
-        return {k: clean(v) for k, v in f.items()}
-
-    write_json(a.out / f"convergence_V{a.speed:g}.json", {
-        "speed": a.speed, "levels": levels, "members": a.members, "overrides": a.override,
-        "figures": [cleaned(f) for f in figs],
-        "member_figures": [{str(m): cleaned(f) for m, f in g.items()} for g in member_figs],
-        "criteria": {k: {"value": clean(float(c.value)), "limit": c.limit, "op": c.op,
-                         "passed": bool(c.passed), "description": c.description}
-                     for k, c in crit.items()},
-        "notes": notes})
+    save(crit, notes)
     plot(a.out / f"convergence_V{a.speed:g}.png", a.speed, levels, figs)
     return 0 if all(c.passed for c in crit.values()) else 1
 
