@@ -535,7 +535,7 @@ def solve_pairs(solver, w: Work) -> tuple:
     return solver.p.kind, w.off_c, w.nb_c, w.mg_c
 
 
-def carried_weight(state: ProjectionState, dt: float, solver=None) -> float:
+def carried_weight(state: ProjectionState, dt: float, solver) -> float:
     """beta = min(1, (dt / dt_prev)^2): the share of the density error rho_i - rho0 left by
     the last step that a step of length dt removes (the solves' source is then
     beta (rho_i - rho0) + dt D_i).  A step shortened to reach an output time or t_end would
@@ -546,10 +546,8 @@ def carried_weight(state: ProjectionState, dt: float, solver=None) -> float:
     set-up's density error is removed at the pace of a full step too (measured: a first step
     of 1e-6 s at PySPH's 2D dam break, dx 0.03, threw particles at 165 m/s and held the
     CFL step at 1/50 of its size for the rest of the run).  Records dt."""
-    ref = state.dt_prev
-    if ref is None and solver is not None:
-        ref = float(solver.stable_dt()[0])
-    beta = 1.0 if ref is None else min(1.0, (dt / ref) ** 2)
+    ref = state.dt_prev if state.dt_prev is not None else float(solver.stable_dt()[0])
+    beta = min(1.0, (dt / ref) ** 2)
     state.dt_prev = dt
     return beta
 
