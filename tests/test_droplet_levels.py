@@ -147,6 +147,38 @@ def test_convergence_script_reads_levels_from_an_earlier_json(tmp_path, capsys):
     assert not any(p.is_dir() for p in out2.iterdir())
 
 
+def test_a_damping_length_below_h_joins_levels_run_without_it(tmp_path, capsys):
+    """inert_override: fluid.bulk_damping_length l <= h = support_factor dx / 2 changes
+    nothing at a level (the damper's length is max(h, l)), so convergence.py --figures-from
+    takes the coarse levels of a file run without it and leaves out the levels where it
+    acts; a length that acts at every level of the file, or another key, is refused."""
+    import json
+
+    h128 = 0.5 * 3.0 * 1e-4 / 128  # the scene's support factor 3, D = 0.1 mm
+    at128, at181 = di.scene_at(10.0, 128, 4.0), di.scene_at(10.0, 181, 4.0)
+    floor = f"fluid.bulk_damping_length={h128!r}"
+    assert di.inert_override(floor, at128) and not di.inert_override(floor, at181)
+    assert not di.inert_override(f"fluid.bulk_damping_length={1.001 * h128!r}", at128)
+    assert di.inert_override("fluid.bulk_damping_length=0.0", at181)
+    assert not di.inert_override("fluid.contact_line=cox-voinov", at128)
+    assert not di.inert_override("fluid.bulk_damping_length=short", at128)
+
+    conv = _convergence_script()
+    levels = (90, 128, 181)
+    figs = manufactured(levels, 10.0, C=0.5)
+    for f in figs:
+        f.update(t_end=4.0 * f["tc"], wall_s=1.0, correlations=list(f["correlations"]))
+    src = tmp_path / "undamped.json"
+    src.write_text(json.dumps({"speed": 10.0, "levels": list(levels), "figures": figs,
+                               "overrides": []}))
+    taken = conv.earlier_figures([src], 10.0, 4.0, [floor])
+    assert sorted(taken) == [(90, 0), (128, 0)]
+    assert taken[128, 0][0]["spread"] == figs[1]["spread"]
+    assert "only D/dx [90, 128]" in capsys.readouterr().out
+    with pytest.raises(SystemExit, match="run with --override"):
+        conv.earlier_figures([src], 10.0, 4.0, ["fluid.bulk_damping_length=1e-5"])
+
+
 def test_convergence_script_runs_one_level_without_criteria(tmp_path, capsys):
     """convergence.py --levels N (one machine per level): the level's figures are printed,
     no criteria are judged, and the convergence file holds the level's figures with no

@@ -72,17 +72,30 @@ def earlier_figures(paths, speed: float, t_end_tc: float,
     """(level, member) -> (figures, file) from earlier ``convergence_V*.json`` files of the
     same speed, end time and ``--override`` set (a later file wins; a file without
     ``member_figures`` holds member 0's); a file of another speed, end time or model variant
-    is an error."""
+    is an error, except for overrides that change nothing at a file's level
+    (:func:`~sphfem.validation.droplet_impact.inert_override`: a damping length below the
+    level's h), so coarse levels run without such a floor join the finer ones run with it."""
+    from sphfem.validation import droplet_impact as di
+
     out: dict[tuple, tuple[dict, str]] = {}
     for path in paths:
         d = json.loads(Path(path).read_text())
         if not math.isclose(float(d["speed"]), speed):
             raise SystemExit(f"--figures-from {path}: speed {d['speed']} m/s, not {speed:g}")
-        if list(d.get("overrides", [])) != list(overrides):
+        theirs = list(d.get("overrides") or [])
+        differ = sorted(set(theirs) ^ set(overrides))
+        same = [n for n in d["levels"] if all(
+            di.inert_override(kv, di.scene_at(speed, int(n), t_end_tc)) for kv in differ)]
+        if not same:
             raise SystemExit(f"--figures-from {path}: run with --override "
-                             f"{d.get('overrides', [])}, not {list(overrides)}")
+                             f"{theirs}, not {list(overrides)}")
+        if len(same) < len(d["levels"]):
+            print(f"--figures-from {path}: only D/dx {same} (run with --override {theirs}, "
+                  f"which differs from {list(overrides)} at its other levels)")
         per_level = d.get("member_figures") or [{"0": f} for f in d["figures"]]
         for n, members in zip(d["levels"], per_level, strict=True):
+            if n not in same:
+                continue
             for m, f in members.items():
                 t_tc = f["t_end"] / f["tc"]
                 if abs(t_tc - t_end_tc) > 1e-6 * t_end_tc:

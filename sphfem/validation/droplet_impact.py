@@ -256,6 +256,26 @@ def apply_overrides(d: dict, overrides) -> dict:
     return d
 
 
+def inert_override(kv: str, scene: dict) -> bool:
+    """True when the override ``"section.key=value"`` leaves the run of ``scene`` (a
+    :func:`scene_at` dict) as it is, so figures run without it stand for a run with it.
+    Today one key: ``fluid.bulk_damping_length`` l at or below the fluid's h = support_factor
+    dx / 2, since the damper's length is max(h, l) (:class:`sphfem.fluid.axisymmetric.
+    AxisymmetricFluid`; ``test_damper_length_floor_scales_the_damping`` shows l <= h
+    changes no bit): a length floor set at one level leaves the coarser levels alone."""
+    key, _, text = kv.partition("=")
+    if key.strip() != "fluid.bulk_damping_length":
+        return False
+    try:
+        length = float(ast.literal_eval(text.strip()))
+    except (ValueError, SyntaxError, TypeError):
+        return False
+    sph = scene["sph"]
+    dx = min([sph["dx"]] + [b["dx"] for b in scene["blocks"]
+                            if b.get("kind") == "fluid" and b.get("dx")])
+    return 0.0 <= length <= 0.5 * sph["support_factor"] * dx
+
+
 def figures(summary: dict, speed: float, diameter: float) -> dict:
     """The four figures (module docstring) and their context from one run's summary."""
     dg = summary["diagnostics"]
