@@ -105,6 +105,8 @@ def _pattern(E, n):
                     cnt += 1
         indptr[i + 1] = indptr[i] + cnt
     indices = np.empty(indptr[n], np.int64)
+    pos = np.empty((nel, nloc, nloc), np.int64)
+    loc = np.empty(n, np.int64)  # column j -> its index in the current row's indices
     mark[:] = -1
     for i in range(n):
         p = indptr[i]
@@ -123,21 +125,14 @@ def _pattern(E, n):
                 indices[m + 1] = indices[m]
                 m -= 1
             indices[m + 1] = j
-    pos = np.empty((nel, nloc, nloc), np.int64)
-    for e in range(nel):
-        for a in range(nloc):
-            i = E[e, a]
-            for b in range(nloc):
-                lo = indptr[i]
-                hi = indptr[i + 1]
-                j = E[e, b]
-                while lo < hi:  # binary search of column j in row i
-                    mid = (lo + hi) // 2
-                    if indices[mid] < j:
-                        lo = mid + 1
-                    else:
-                        hi = mid
-                pos[e, a, b] = lo
+        for k in range(indptr[i], indptr[i + 1]):
+            loc[indices[k]] = k
+        for k in range(start[i], start[i + 1]):  # the row's pairs of each element at i
+            e = elems[k]
+            for a in range(nloc):
+                if E[e, a] == i:
+                    for b in range(nloc):
+                        pos[e, a, b] = loc[E[e, b]]
     return indptr, indices, pos
 
 
@@ -285,14 +280,18 @@ def elasticity_stiffness(vbasis: Basis, lam: float, mu: float,
     Ev = Ev.reshape(nloc, dim, -1)
     if not np.array_equal(Ev, dim * Es[:, None, :] + np.arange(dim)[None, :, None]):
         return None
-    E = np.ascontiguousarray(Es.T.astype(np.int64))
+    # the cells in the order of their lowest dof: consecutive cells then add into nearby
+    # rows of K (1.5-1.8x faster at 1e5 unknowns of a gmsh tet mesh; the sums differ in
+    # their order only)
+    order = np.argsort(Es.min(axis=0), kind="stable")
+    E = np.ascontiguousarray(Es.T[order].astype(np.int64))
     n = vbasis.N // dim
     mesh, scalar = vbasis.mesh, elem.elem
     J = affine_jacobians(mesh) if intorder is not None else None
     if J is not None:
         X, W = get_quadrature(scalar.refdom, intorder)
         ghat = _reference_gradients(scalar, X)  # (nloc, dim, nqp)
-        invJ, detJ = _inv_det(J)
+        invJ, detJ = _inv_det(J[..., order])
         if len(W) < 2 * dim:  # few points: physical gradients, nqp dim^2 per pair
             G = np.einsum("ekc,akq->eqac", invJ, ghat, optimize=True)
             dx = np.abs(detJ)[:, None] * W[None, :]
@@ -305,9 +304,9 @@ def elasticity_stiffness(vbasis: Basis, lam: float, mu: float,
     else:  # gradients at the quadrature points of a scalar scikit-fem basis
         sb = Basis(mesh, scalar, intorder=intorder)
         G = np.stack([sb.basis[a][0].grad for a in range(sb.Nbfun)])  # (nloc, dim, nel, nqp)
-        ptr, ind, data = _elastic_general(np.ascontiguousarray(G.transpose(2, 3, 0, 1)),
-                                          np.ascontiguousarray(sb.dx), E, n, float(lam),
-                                          float(mu))
+        ptr, ind, data = _elastic_general(
+            np.ascontiguousarray(G.transpose(2, 3, 0, 1)[order]),
+            np.ascontiguousarray(sb.dx[order]), E, n, float(lam), float(mu))
     K = sp.csr_matrix((data, ind, ptr), shape=(vbasis.N, vbasis.N))
     K.has_sorted_indices = True
     return K
