@@ -365,3 +365,49 @@ def test_scene_members_jitter_the_droplet_only():
     assert d0["output"]["every"] == d2["output"]["every"] == f"{di.OUTPUT_EVERY_TC:g} tc"
     with pytest.raises(ValueError, match="member must be >= 0"):
         di.scene_at(10.0, 16, 0.5, member=-1)
+
+
+def test_tip_frames_finds_the_sheets_tip(tmp_path):
+    """examples/droplet_impact/tip_frames.py: the tip is the outermost fluid ring within
+    2 dx of the wall top (a ring higher up and further out, e.g. a drop in flight, is not
+    it), the window holds the rings behind it, and the figure is written; a folder without
+    frames is refused by name."""
+    import importlib.util
+    from pathlib import Path
+
+    import meshio
+    import numpy as np
+
+    path = Path(__file__).parents[1] / "examples" / "droplet_impact" / "tip_frames.py"
+    spec = importlib.util.spec_from_file_location("tip_frames", path)
+    tf = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(tf)
+    D, n = 1e-4, 50
+    dx = D / n
+    run = tmp_path / "run"
+    run.mkdir()
+    wall = np.array([[i * dx, -0.5 * dx, 0.0] for i in range(60)])
+    sheet = np.array([[i * dx, (0.5 + k) * dx, 0.0] for i in range(40) for k in range(3)])
+    flying = np.array([[55 * dx, 10 * dx, 0.0]])
+    pts = np.vstack([wall, sheet, flying])
+    kind = np.r_[np.ones(len(wall)), np.zeros(len(sheet) + 1)]
+    v = np.zeros_like(pts)
+    v[len(wall):, 1] = -1.0
+    files = []
+    for k, t in enumerate((0.0, 1e-6)):
+        name = f"particles_{k:05d}.vtu"
+        meshio.Mesh(pts, [("vertex", np.arange(len(pts))[:, None])],
+                    point_data={"kind": kind, "v": v}).write(run / name)
+        files.append(f'<DataSet timestep="{t}" group="" part="0" file="{name}"/>')
+    (run / "particles.pvd").write_text(
+        '<?xml version="1.0"?><VTKFile type="Collection" version="0.1"><Collection>'
+        + "".join(files) + "</Collection></VTKFile>")
+    assert [t for t, _ in tf.frames(run)] == [0.0, 1e-6]
+    r, z, vz, rw, zw, tip = tf.tip_window(run / "particles_00001.vtu", dx, 0.31, 0.06)
+    assert tip == pytest.approx(39 * dx / D)
+    assert len(r) == 3 * 16 and np.all(vz == -1.0) and z.min() == pytest.approx(0.5 * dx / D)
+    out = tmp_path / "tip.png"
+    assert tf.main([f"{run}:a", "--n", str(n), "--times", "0", "0.1", "--out", str(out)]) == 0
+    assert out.stat().st_size > 0
+    with pytest.raises(SystemExit):
+        tf.main([str(tmp_path), "--n", str(n), "--times", "0", "--out", str(out)])
