@@ -303,6 +303,40 @@ def _members(levels, speed, C, rel_scatter):
     return out
 
 
+def test_members_needed_is_where_the_criterion_turns():
+    """members_needed: the 8 % scatter that fails with three members per level passes with
+    the K it names and fails with K - 1 (members placed so that every level keeps its mean
+    and its sample deviation); a sequence whose non-sampling part already exceeds 10 %
+    (C = 40) cannot be mended by members."""
+    import numpy as np
+
+    levels = (64, 90, 128)
+    figs3 = [di.ensemble(ms) for ms in _members(levels, 10.0, 2.0, 0.08)]
+    hs = [1e-4 / n for n in levels]
+    est, _, se, _ = di.figure_estimate(hs, figs3, "spread")
+    sd = se[-1] * math.sqrt(3)
+    need = di.members_needed(est, hs, sd, 3)
+    assert need is not None and need > 3
+
+    def with_members(k):
+        z = np.linspace(-1.0, 1.0, k)
+        z /= z.std(ddof=1)
+        out = []
+        for f in manufactured(levels, 10.0, 2.0):
+            ms = []
+            for e in 0.08 * z:  # sample deviation 8 %, as _members(..., 0.08)
+                ms.append(dict(f, **{key: f[key] * (1.0 + e) for key in di.FIGURES}))
+            out.append(di.ensemble(ms))
+        return di.speed_criteria(10.0, levels, out)[0]["10 m/s spread converged"]
+
+    assert with_members(need).passed and not with_members(need - 1).passed
+    _, notes = di.speed_criteria(10.0, levels, figs3)
+    assert any(f"members per level for 10% at these means and scatter: {need}" in x for x in notes)
+    far = [di.ensemble(ms) for ms in _members(levels, 10.0, 40.0, 0.08)]
+    est, _, se, _ = di.figure_estimate(hs, far, "spread")
+    assert di.members_needed(est, hs, se[-1] * math.sqrt(3), 3) is None
+
+
 def test_ensemble_means_worst_gates_and_sample_deviation():
     levels = (64, 90, 128)
     (m0, m1, m2), *_ = _members(levels, 10.0, 2.0, 0.05)

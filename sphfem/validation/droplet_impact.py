@@ -493,6 +493,28 @@ def figure_estimate(hs, figs: list[dict], key: str):
     return est, t95 * math.hypot((1.0 + q) * se[-1], q * se[-2]), se, dof
 
 
+def members_needed(est, hs, sd: float, n_levels: int, tol: float = TOL_CONVERGED,
+                   most: int = 1000) -> int | None:
+    """The members per level K that would bring a figure's ``converged`` criterion under
+    ``tol`` with the run-to-run scatter ``sd`` (the pooled standard deviation of one run)
+    unchanged: the smallest K with |f_fine - f_0| + error bar + u(K) <= tol |f_0|, u(K) =
+    t_{n_levels (K - 1)} sd sqrt((1 + q)^2 + q^2) / sqrt(K) the sampling term of
+    :func:`figure_estimate` with K members at every level (the estimate ``est``: its limit,
+    finest value, error bar and order kept).  None when the part without the sampling
+    already exceeds ``tol`` (no ensemble can pass it) or K would exceed ``most``."""
+    from scipy.stats import t as student_t
+
+    room = tol * abs(est.value) - abs(est.finest - est.value) - est.error_bar
+    if not room > 0.0:
+        return None
+    q = 1.0 / ((hs[-2] / hs[-1]) ** est.order - 1.0) if est.order is not None else 0.0
+    spread = sd * math.hypot(1.0 + q, q)
+    for k in range(2, most + 1):
+        if student_t.ppf(0.975, n_levels * (k - 1)) * spread / math.sqrt(k) <= room:
+            return k
+    return None
+
+
 def speed_criteria(speed: float, levels, figs: list[dict], quick: bool = False):
     """The criteria (name -> :class:`Criterion`) and notes of one impact speed from the
     figures (:func:`figures`) of its ``levels`` (particles across the droplet, coarse to
@@ -516,8 +538,13 @@ def speed_criteria(speed: float, levels, figs: list[dict], quick: bool = False):
         rel = ((abs(est.finest - est.value) + est.error_bar + u) / abs(est.value)
                if est.value else math.inf)
         order = f"{est.order:.2f}" if est.order is not None else "none"
-        scatter = (f"; members {ks}, pooled sd {se[-1] * math.sqrt(ks[-1]):.3g} ({dof} dof), "
-                   f"sampling +- {u:.2g} (95 %)" if dof else "")
+        scatter = ""
+        if dof:
+            sd = se[-1] * math.sqrt(ks[-1])
+            need = members_needed(est, hs, sd, len(figs))
+            scatter = (f"; members {ks}, pooled sd {sd:.3g} ({dof} dof), sampling +- {u:.2g} "
+                       f"(95 %); members per level for {TOL_CONVERGED:.0%} at these means "
+                       "and scatter: " + (f"{need}" if need else "none suffices"))
         notes.append(f"{tag} {label}: levels {[f'{f[key]:.4g}' for f in figs]}, order "
                      f"{order}, limit {est.value:.4g} +- {est.error_bar:.2g}"
                      f"{' (' + est.note + ')' if est.note else ''}{scatter}")
