@@ -74,8 +74,8 @@ def main(argv=None) -> int:
     for run, _ in runs:
         if not (run / "particles.pvd").is_file():
             ap.error(f"{run}: no particles.pvd (a run folder with its frames is needed)")
-    fig, axes = plt.subplots(len(a.times), len(runs), squeeze=False,
-                             figsize=(5.0 * len(runs), 1.6 * len(a.times) + 0.6))
+    fig, axes = plt.subplots(len(a.times), len(runs), squeeze=False, layout="constrained",
+                             figsize=(4.0 * len(runs) + 1.0, 1.3 * len(a.times) + 0.5))
     sc = None
     for j, (run, label) in enumerate(runs):
         fr = frames(run)
@@ -94,7 +94,7 @@ def main(argv=None) -> int:
     for ax in axes[:, 0]:
         ax.set_ylabel("z / D")
     fig.colorbar(sc, ax=axes, shrink=0.6, label="v_z / V")
-    fig.savefig(a.out, dpi=110)
+    fig.savefig(a.out, dpi=90)
     print(f"wrote {a.out}")
     return 0
 
