@@ -171,10 +171,11 @@ def pysph_worker(a) -> dict:
 # our worker (the project's Python)
 # ------------------------------------------------------------------------------------------
 def build_ours_2d(dx: float, R_over_dx: float = 3.0, alpha: float = 0.02, cfl: float = 0.25,
-                  threads: int = 0, pressure: str = "wcsph"):
+                  threads: int = 0, pressure: str = "wcsph", skin: float | None = None):
     """PySPH dam_break_2d in sphfem: its column (1/dx + 1) x (2/dx + 1) particles, spacing
     dx, standing on the floor at the left wall of a 4 x 4 tank (3 Adami layers);
-    ``pressure``: the [fluid] pressure method (:func:`_fluid_start`)."""
+    ``pressure``: the [fluid] pressure method (:func:`_fluid_start`); ``skin``: the Verlet
+    skin (None: FluidParams' default)."""
     import numpy as np
 
     from sphfem.fluid.setup import box_walls, hydrostatic_density, lattice, make_particles
@@ -190,7 +191,8 @@ def build_ours_2d(dx: float, R_over_dx: float = 3.0, alpha: float = 0.02, cfl: f
             else None)
     ps = make_particles(xf, xw, dx, 1000.0, rhof)
     par = FluidParams(c0=c0, mu=1e-3, gravity=(0.0, -G), alpha=alpha, cfl=cfl,
-                      threads=threads, pressure=pressure)
+                      threads=threads, pressure=pressure,
+                      **({} if skin is None else {"skin": skin}))
     m = (layers + 1) * dx
     s = FluidSolver(ps, R_over_dx * dx, [-m, -m], [4.0 + m, 8.0], params=par)
     return _fluid_start(s, ny * dx, pressure), 0.0
@@ -237,7 +239,7 @@ def pysph_3d_boxes(dx: float) -> dict:
 
 
 def build_ours_3d(dx: float, R_over_dx: float = 3.0, alpha: float = 0.02, cfl: float = 0.25,
-                  threads: int = 0, pressure: str = "wcsph"):
+                  threads: int = 0, pressure: str = "wcsph", skin: float | None = None):
     """PySPH dam_break_3d (SPHERIC test 2) in sphfem, in the example's coordinates: the
     same fluid and obstacle particles (:func:`pysph_3d_boxes`; the obstacle filled with
     wall particles), the tank's inside bounded by 3 Adami layers whose inner one sits where
@@ -259,7 +261,8 @@ def build_ours_3d(dx: float, R_over_dx: float = 3.0, alpha: float = 0.02, cfl: f
             else None)
     ps = make_particles(xf, np.vstack([xw, xo]), dx, 1000.0, rhof)
     par = FluidParams(c0=c0, mu=1e-3, gravity=(0.0, 0.0, -G), alpha=alpha, cfl=cfl,
-                      threads=threads, pressure=pressure)
+                      threads=threads, pressure=pressure,
+                      **({} if skin is None else {"skin": skin}))
     m = (layers + 1) * dx
     lo, hi = b["tank"]
     s = FluidSolver(ps, R_over_dx * dx, [lo[0] - m, lo[1] - m, lo[2] - m],
@@ -275,7 +278,8 @@ def ours_worker(a) -> dict:
 
     t0 = time.perf_counter()
     build = build_ours_2d if a.case == "2d" else build_ours_3d
-    s, x_face = build(a.dx, a.R_over_dx, a.alpha, a.cfl, a.ours_threads, a.pressure[0])
+    s, x_face = build(a.dx, a.R_over_dx, a.alpha, a.cfl, a.ours_threads, a.pressure[0],
+                      a.skin)
     setup_s = time.perf_counter() - t0
     fl = s.p.kind == FLUID
 
@@ -308,7 +312,7 @@ def ours_worker(a) -> dict:
     d = s.diagnostics()
     return {
         "code": "sphfem", "case": a.case, "pressure": a.pressure[0], "dx": a.dx,
-        "R_over_dx": a.R_over_dx,
+        "R_over_dx": a.R_over_dx, "skin": s.params.skin,
         "alpha": a.alpha, "cfl": a.cfl, "c0": s.params.c0,
         "n_fluid": int(fl.sum()), "n_total": int(s.p.n), "threads_fluid": s.nthreads,
         "numba_threads": numba.get_num_threads(), "setup_s": setup_s, "solve_s": solve_s,
@@ -407,11 +411,13 @@ def run_pysph(python, case, dx, t_end, sample, threads, wait_policy, scheme="wcs
 
 
 def run_ours(case, dx, t_end, sample, threads, R_over_dx, alpha, cfl, wait_policy,
-             ours_threads, pressure="wcsph", timeout=7200) -> dict:
+             ours_threads, pressure="wcsph", timeout=7200, skin=None) -> dict:
     cmd = [sys.executable, os.path.abspath(__file__), "--ours-worker", "--case", case,
            "--dx", repr(dx), "--t-end", repr(t_end), "--sample", repr(sample),
            "--R-over-dx", repr(R_over_dx), "--alpha", repr(alpha), "--cfl", repr(cfl),
            "--ours-threads", str(ours_threads), "--pressure", pressure]
+    if skin is not None:
+        cmd += ["--skin", repr(skin)]
     env = {"NUMBA_NUM_THREADS": str(threads)}
     if wait_policy:  # numba's threading layer is OpenMP here too: the same policy
         env["OMP_WAIT_POLICY"] = wait_policy
@@ -578,6 +584,8 @@ def main(argv=None):
                          "one thread below 20,000 particles)")
     ap.add_argument("--rounds", type=int, default=2)
     ap.add_argument("--R-over-dx", type=float, default=3.0)
+    ap.add_argument("--skin", type=float, default=None,
+                    help="Verlet skin of ours as a fraction of R (default: FluidParams')")
     ap.add_argument("--alpha", type=float, default=0.02)
     ap.add_argument("--cfl", type=float, nargs="+", default=[0.25],
                     help="[time] cfl of ours; several: one sphfem variant each (the first "
@@ -650,7 +658,8 @@ def main(argv=None):
                     r["label"] = "pysph" if pm == schemes[0] else f"pysph {pm}"
                 else:
                     r = run_ours(case, dx, t_end, a.sample, a.threads, a.R_over_dx,
-                                 a.alpha, cfl, a.omp_wait_policy, a.ours_threads, pm)
+                                 a.alpha, cfl, a.omp_wait_policy, a.ours_threads, pm,
+                                 skin=a.skin)
                     r["label"] = ("sphfem " + ("" if pm == "wcsph" else pm + " ")
                                   + f"cfl={cfl:g}")
                 r["round"] = rnd
