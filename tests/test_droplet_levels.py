@@ -40,6 +40,15 @@ def manufactured(levels, speed, C, p=1.0):
     return figs
 
 
+def _as_saved(levels):
+    """:func:`manufactured` figures (C = 0.5) as convergence.py saves a 4 t_c run's: end
+    time, wall seconds, the band as a list."""
+    figs = manufactured(levels, 10.0, C=0.5)
+    for f in figs:
+        f.update(t_end=4.0 * f["tc"], wall_s=1.0, correlations=list(f["correlations"]))
+    return figs
+
+
 def test_speed_criteria_pass_near_the_limit_and_fail_far_from_it():
     """Levels 64, 90, 128 with first-order errors: C = 2 (finest 1.6 % off the limit,
     error bar 2 %) converges; C = 40 (31 % off) does not; the limit is recovered either way."""
@@ -81,9 +90,7 @@ def test_convergence_script_reads_levels_from_an_earlier_json(tmp_path, capsys):
 
     conv = _convergence_script()
     levels = (64, 90, 128)
-    figs = manufactured(levels, 10.0, C=0.5)
-    for f in figs:
-        f.update(t_end=4.0 * f["tc"], wall_s=1.0, correlations=list(f["correlations"]))
+    figs = _as_saved(levels)
     src = tmp_path / "earlier.json"
     src.write_text(json.dumps({"speed": 10.0, "levels": list(levels), "figures": figs}))
     out = tmp_path / "out"
@@ -165,9 +172,7 @@ def test_a_damping_length_below_h_joins_levels_run_without_it(tmp_path, capsys):
 
     conv = _convergence_script()
     levels = (90, 128, 181)
-    figs = manufactured(levels, 10.0, C=0.5)
-    for f in figs:
-        f.update(t_end=4.0 * f["tc"], wall_s=1.0, correlations=list(f["correlations"]))
+    figs = _as_saved(levels)
     src = tmp_path / "undamped.json"
     src.write_text(json.dumps({"speed": 10.0, "levels": list(levels), "figures": figs,
                                "overrides": []}))
