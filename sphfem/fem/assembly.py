@@ -281,8 +281,8 @@ def elasticity_stiffness(vbasis: Basis, lam: float, mu: float,
     if not np.array_equal(Ev, dim * Es[:, None, :] + np.arange(dim)[None, :, None]):
         return None
     # the cells in the order of their lowest dof: consecutive cells then add into nearby
-    # rows of K (1.5-1.8x faster at 1e5 unknowns of a gmsh tet mesh; the sums differ in
-    # their order only)
+    # rows of K (the element loop 1.5-1.7x, the whole assembly ~1.15x faster at 1e5
+    # unknowns of a gmsh tet mesh, benchmarks/README.md; the sums differ in order only)
     order = np.argsort(Es.min(axis=0), kind="stable")
     E = np.ascontiguousarray(Es.T[order].astype(np.int64))
     n = vbasis.N // dim
