@@ -24,7 +24,6 @@ from __future__ import annotations
 
 import logging
 import os
-import xml.etree.ElementTree as ET
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -247,9 +246,9 @@ class Result:
             pvd = self.out / self._coupling_folder() / f"{series}.pvd"
         if not pvd.is_file():
             raise FileNotFoundError(f"{pvd}: no such series")
-        root = ET.parse(pvd).getroot()
-        return [(float(d.get("timestep")), pvd.parent / d.get("file"))
-                for d in root.iter("DataSet")]
+        from sphfem.output import pvd_frames
+
+        return pvd_frames(pvd)
 
     def frame(self, k: int = -1, series: str = "particles") -> dict:
         """Frame ``k`` of a series as ``{"t": s, "x": (n, dim) points, field: array}``

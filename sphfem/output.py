@@ -145,6 +145,17 @@ def _zlib_level(level):
         _vtu.zlib = zlib
 
 
+def pvd_frames(pvd) -> list[tuple[float, Path]]:
+    """``[(t, path of the VTU), ...]`` listed by a ParaView ``.pvd`` collection (as
+    :class:`VTUSeries` writes it), in the file's order."""
+    import xml.etree.ElementTree as ET
+
+    pvd = Path(pvd)
+    root = ET.parse(pvd).getroot()
+    return [(float(d.get("timestep")), pvd.parent / d.get("file"))
+            for d in root.iter("DataSet")]
+
+
 class VTUSeries:
     """A VTU file per output time plus a ParaView ``.pvd`` collection listing them by time.
 

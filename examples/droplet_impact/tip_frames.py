@@ -19,7 +19,6 @@ start part at the tip, where the rim rolls over the sheet.
 from __future__ import annotations
 
 import argparse
-import xml.etree.ElementTree as ET
 from pathlib import Path
 
 import numpy as np
@@ -29,8 +28,9 @@ D0 = 1e-4  #: the droplet diameter of the validation scene [m]
 
 def frames(run: Path) -> list[tuple[float, Path]]:
     """(t [s], file) of the frames listed in ``run/particles.pvd``."""
-    root = ET.parse(run / "particles.pvd").getroot()
-    return [(float(d.get("timestep")), run / d.get("file")) for d in root.iter("DataSet")]
+    from sphfem.output import pvd_frames
+
+    return pvd_frames(run / "particles.pvd")
 
 
 def tip_window(path: Path, dx: float, width: float, height: float):

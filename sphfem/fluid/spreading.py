@@ -528,17 +528,14 @@ def read_frames(folder, name: str = "particles", dim: int = 3):
     """Yield ``(t, x, kind)`` of each frame of a particle series (``folder/name.pvd``, as
     :class:`sphfem.output.ParticleSeries` writes it; ``kind`` must be among the written
     fields); positions are cut to the scene's dimension ``dim``."""
-    import xml.etree.ElementTree as ET
-
     import meshio
 
-    folder = Path(folder)
-    root = ET.parse(folder / f"{name}.pvd").getroot()
-    for ds in root.iter("DataSet"):
-        t = float(ds.get("timestep"))
-        mesh = meshio.read(folder / ds.get("file"))
+    from sphfem.output import pvd_frames
+
+    for t, path in pvd_frames(Path(folder) / f"{name}.pvd"):
+        mesh = meshio.read(path)
         if "kind" not in mesh.point_data:
-            raise ValueError(f"{ds.get('file')}: no 'kind' field (add \"kind\" to [output] "
+            raise ValueError(f"{path.name}: no 'kind' field (add \"kind\" to [output] "
                              f"fields)")
         x = np.asarray(mesh.points, float)[:, :dim]
         yield t, x, np.asarray(mesh.point_data["kind"]).ravel().astype(int)
