@@ -263,12 +263,11 @@ def inert_override(kv: str, scene: dict) -> bool:
     dx / 2, since the damper's length is max(h, l) (:class:`sphfem.fluid.axisymmetric.
     AxisymmetricFluid`; ``test_damper_length_floor_scales_the_damping`` shows l <= h
     changes no bit): a length floor set at one level leaves the coarser levels alone."""
-    key, _, text = kv.partition("=")
-    if key.strip() != "fluid.bulk_damping_length":
+    if kv.partition("=")[0].strip() != "fluid.bulk_damping_length":
         return False
-    try:
-        length = float(ast.literal_eval(text.strip()))
-    except (ValueError, SyntaxError, TypeError):
+    try:  # the value as apply_overrides reads it
+        length = float(apply_overrides({}, [kv])["fluid"]["bulk_damping_length"])
+    except (ValueError, TypeError, KeyError):
         return False
     sph = scene["sph"]
     dx = min([sph["dx"]] + [b["dx"] for b in scene["blocks"]
